@@ -1,0 +1,136 @@
+//! Canonical system and Gaussian bases (Sec. 3.2).
+//!
+//! τζ̇ = −α_ζ ζ has the exact solution ζ(t) = exp(−α_ζ t/τ): for a fixed step Δt the phase is
+//! advanced by one multiplication with exp(−α_ζ Δt/τ), no drift. Bases
+//! ψ_i(ζ) = exp(−h_i (ζ − c_i)²) with centres c_i = exp(−α_ζ (i−1)/(n_g−1)) and widths
+//! h_i = 2/(c_{i+1} − c_i)², h_{n_g} = h_{n_g−1}, evenly spaced in time.
+
+use super::{DmpError, DmpParams, MAX_BASES};
+
+/// Bases whose exponent exceeds this contribute < 1e-26 relative: skipped (no `exp` call).
+const NEGLIGIBLE_EXPONENT: f64 = 60.0;
+
+/// Centres and widths of the n_g Gaussian bases.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Basis {
+    pub n: usize,
+    pub centres: [f64; MAX_BASES],
+    pub widths: [f64; MAX_BASES],
+}
+
+/// Normalised, phase-gated activations φ_i(ζ) = ψ_i(ζ) ζ / Σ_j ψ_j(ζ); non-zero only in
+/// `first..last`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Features {
+    pub values: [f64; MAX_BASES],
+    pub first: usize,
+    pub last: usize,
+}
+
+impl Basis {
+    pub fn new(p: &DmpParams) -> Result<Self, DmpError> {
+        if !(2..=MAX_BASES).contains(&p.n_basis)
+            || !(p.alpha_zeta > 0.0 && p.alpha_zeta.is_finite())
+            || !(p.alpha_z > 0.0 && p.alpha_z.is_finite())
+            || !(p.beta_z > 0.0 && p.beta_z.is_finite())
+        {
+            return Err(DmpError::BadParams);
+        }
+        let n = p.n_basis;
+        let mut centres = [0.0; MAX_BASES];
+        let mut widths = [0.0; MAX_BASES];
+        for (i, c) in centres.iter_mut().take(n).enumerate() {
+            *c = libm::exp(-p.alpha_zeta * i as f64 / (n - 1) as f64);
+        }
+        for i in 0..n - 1 {
+            let d = centres[i + 1] - centres[i];
+            widths[i] = 2.0 / (d * d);
+        }
+        widths[n - 1] = widths[n - 2];
+        Ok(Basis { n, centres, widths })
+    }
+
+    /// φ(ζ) for all bases.
+    pub fn features(&self, zeta: f64) -> Features {
+        let mut values = [0.0; MAX_BASES];
+        let (mut first, mut last) = (usize::MAX, 0);
+        let mut sum = 0.0;
+        for i in 0..self.n {
+            let d = zeta - self.centres[i];
+            let x = self.widths[i] * d * d;
+            if x < NEGLIGIBLE_EXPONENT {
+                let psi = libm::exp(-x);
+                values[i] = psi;
+                sum += psi;
+                first = first.min(i);
+                last = i + 1;
+            }
+        }
+        if sum <= 0.0 {
+            // Far beyond the last centre (ζ → 0): the gated forcing term is zero.
+            return Features {
+                values: [0.0; MAX_BASES],
+                first: 0,
+                last: 0,
+            };
+        }
+        let k = zeta / sum;
+        for v in &mut values[first..last] {
+            *v *= k;
+        }
+        Features {
+            values,
+            first,
+            last,
+        }
+    }
+}
+
+/// Phase of one integration: ζ and the features at the current and the next step.
+#[derive(Clone, Copy, Debug)]
+pub struct Phase {
+    pub basis: Basis,
+    /// Step index k (time kΔt).
+    pub step: usize,
+    /// Number of steps of the whole motion, round(τ/Δt).
+    pub n_steps: usize,
+    decay: f64,
+    zeta_next: f64,
+    /// φ(ζ_k).
+    pub current: Features,
+    /// φ(ζ_{k+1}).
+    pub next: Features,
+}
+
+impl Phase {
+    /// Phase for a motion of duration `tau` integrated with step `dt`.
+    pub fn new(p: &DmpParams, tau: f64, dt: f64) -> Result<Self, DmpError> {
+        if !(dt > 0.0 && tau >= dt && tau.is_finite()) {
+            return Err(DmpError::BadParams);
+        }
+        let basis = Basis::new(p)?;
+        let decay = libm::exp(-p.alpha_zeta * dt / tau);
+        Ok(Phase {
+            basis,
+            step: 0,
+            n_steps: libm::round(tau / dt) as usize,
+            decay,
+            zeta_next: decay,
+            current: basis.features(1.0),
+            next: basis.features(decay),
+        })
+    }
+
+    /// Moves from step k to k+1: one basis evaluation.
+    pub fn advance(&mut self) {
+        self.step += 1;
+        self.current = self.next;
+        self.zeta_next *= self.decay;
+        self.next = self.basis.features(self.zeta_next);
+    }
+
+    /// True once all `n_steps` steps are done.
+    pub fn finished(&self) -> bool {
+        self.step >= self.n_steps
+    }
+}

@@ -1,0 +1,87 @@
+//! Forward kinematics, TCP pose and the geometric Jacobian: the one home of FK.
+//!
+//! Arm quantities are expressed in the arm base frame (URDF `link_0`), as the paper's
+//! T_e^b = F_a(q_a); [`platform_pose`] gives T_b = F_m(q_m) and [`arm_base_pose`] chains both.
+
+use crate::robot::{LINK_TOOL, N_FRAMES, RobotModel};
+use crate::se3::Pose;
+use crate::{Jacobian, JointVector, NA};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+/// Everything one kinematics evaluation yields at a configuration q_a.
+#[derive(Clone, Copy, Debug)]
+pub struct ArmKinematics {
+    /// Frames in the arm base frame: 0 = arm base (identity), 1..=7 = links, 8 = flange.
+    pub frames: [Pose; N_FRAMES],
+    /// TCP pose T_e in the arm base frame.
+    pub tcp: Pose,
+}
+
+impl ArmKinematics {
+    /// Forward kinematics: T_i = T_{i−1} · origin_i · Rot(axis_i, q_i).
+    pub fn new(model: &RobotModel, q: &JointVector) -> Self {
+        let mut frames = [Pose::identity(); N_FRAMES];
+        for i in 0..NA {
+            let j = &model.joints[i];
+            frames[i + 1] = frames[i] * j.origin * UnitQuaternion::from_axis_angle(&j.axis, q[i]);
+        }
+        frames[LINK_TOOL] = frames[NA] * model.flange;
+        let tcp = frames[LINK_TOOL] * model.tcp;
+        ArmKinematics { frames, tcp }
+    }
+
+    /// Geometric Jacobian of the TCP, 6×7, rows [v; ω] in the arm base frame:
+    /// column i = [z_i × (p_e − p_i); z_i].
+    pub fn jacobian(&self, model: &RobotModel) -> Jacobian {
+        let pe = self.tcp.translation.vector;
+        let mut jac = Jacobian::zeros();
+        for i in 0..NA {
+            let f = &self.frames[i + 1];
+            let z = f.rotation * model.joints[i].axis.into_inner();
+            let v = z.cross(&(pe - f.translation.vector));
+            jac.fixed_view_mut::<3, 1>(0, i).copy_from(&v);
+            jac.fixed_view_mut::<3, 1>(3, i).copy_from(&z);
+        }
+        jac
+    }
+
+    /// Centres of the model's collision spheres in the arm base frame, written to `out`
+    /// (which must hold `model.spheres.len()` entries; extra entries are left untouched).
+    pub fn sphere_centres(&self, model: &RobotModel, out: &mut [Vector3<f64>]) {
+        for (s, o) in model.spheres.iter().zip(out.iter_mut()) {
+            *o = self.frames[s.link as usize]
+                .transform_point(&s.centre.into())
+                .coords;
+        }
+    }
+}
+
+/// Pose of the platform base frame `b` in the world from q_m = [x, y, yaw].
+pub fn platform_pose(q_m: [f64; 3]) -> Pose {
+    Isometry3::from_parts(
+        Translation3::new(q_m[0], q_m[1], 0.0),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q_m[2]),
+    )
+}
+
+/// Pose of the arm base frame in the world.
+pub fn arm_base_pose(model: &RobotModel, q_m: [f64; 3]) -> Pose {
+    platform_pose(q_m) * model.mount
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zero_configuration_is_a_vertical_arm() {
+        let model = RobotModel::kmr_iiwa14();
+        let k = ArmKinematics::new(&model, &JointVector::zeros());
+        // DH: d1 + d3 + d5 + d7 = 0.36 + 0.42 + 0.40 + 0.126 m straight up, plus the TCP offset.
+        let p = k.tcp.translation.vector;
+        assert!(
+            (p - Vector3::new(0.0, 0.0, 1.306 + 0.15)).norm() < 1e-12,
+            "{p:?}"
+        );
+    }
+}

@@ -1,0 +1,360 @@
+//! Redundancy DMPs (Sec. 4.2): TrainRDMP (Alg. 1) and IntegrateRDMP (Alg. 2).
+//!
+//! A joint-space demonstration q(t) is split into the TCP trajectory (p(t), R(t)) in the arm
+//! base frame and the compact null-space coordinate γ(t) = ∫ Mᵀ(q) dq (Eq. 22, with M from
+//! [`crate::nullspace`]); each is encoded as a DMP. Integration drives the three DMPs together
+//! and maps their velocities back to the joints, q̇ = J⁺V + Mγ̇, one step per tick.
+//!
+//! Differences from the letter of Alg. 2, each for accuracy on the robot:
+//! - the twist V = [ṗ; ω] is the DMPs' own velocity over the step (no numerical
+//!   differentiation of R(t)), and M comes from the cofactor kernel instead of an SVD;
+//! - closed-loop IK: V gets `gain` × the pose error between the DMP pose and FK(q), so the
+//!   Euler step q ← q + q̇Δt does not drift away from the DMP's TCP path;
+//! - γ is measured along the executed path with the same trapezoid rule used in training, and
+//!   γ̇ gets `gain` × (γ_DMP − γ_measured): the null-space motion follows the trained γ(t).
+//!
+//! Singular configurations (manipulability below [`RdmpConfig::min_manipulability`]), joint
+//! limits and non-finite values stop integration with a typed [`RdmpError`].
+
+use crate::dmp::{
+    DmpError, DmpParams, MIN_SAMPLES, Phase, PositionDmp, PositionState, RotationDmp, RotationState,
+};
+use crate::kinematics::ArmKinematics;
+use crate::nullspace::{kernel, pinv_apply};
+use crate::robot::RobotModel;
+use crate::se3::{Pose, pose_error};
+use crate::{JointVector, NA};
+use nalgebra::{Isometry3, Translation3, Vector1, Vector3, Vector6};
+
+/// A trained RDMP, w_RDMP = (w_p, w_R, w_γ, γ_g) (Alg. 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rdmp {
+    /// TCP position in the arm base frame.
+    pub position: PositionDmp<3>,
+    /// TCP rotation in the arm base frame.
+    pub rotation: RotationDmp,
+    /// Compact null-space coordinate γ (γ(0) = 0).
+    pub gamma: PositionDmp<1>,
+    /// Null-space goal γ_g = γ(t̄), reused unchanged for new goals.
+    pub gamma_goal: f64,
+}
+
+/// Settings of an RDMP integration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RdmpConfig {
+    /// Integration step Δt, s (the executor's tick).
+    pub dt: f64,
+    /// Feedback gain on pose and γ errors, 1/s; gain·Δt must stay well below 1.
+    pub gain: f64,
+    /// Configurations with sqrt(det(J Jᵀ)) below this are reported as singular.
+    pub min_manipulability: f64,
+}
+
+impl Default for RdmpConfig {
+    fn default() -> Self {
+        RdmpConfig {
+            dt: 1e-3,
+            gain: 50.0,
+            min_manipulability: 0.01,
+        }
+    }
+}
+
+/// Why an RDMP could not be trained or integrated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RdmpError {
+    Dmp(DmpError),
+    /// Demonstration sample `sample` is too close to a singularity for a null space.
+    SingularDemonstration {
+        sample: usize,
+        manipulability: f64,
+    },
+    /// Integration reached a near-singular configuration at step `step`.
+    Singular {
+        step: usize,
+        manipulability: f64,
+    },
+    /// Integration would leave the position limits of `joint` at step `step`.
+    JointLimit {
+        step: usize,
+        joint: usize,
+        value: f64,
+    },
+    /// A non-finite value appeared (input or integration) at step/sample `step`.
+    NonFinite {
+        step: usize,
+    },
+    /// Buffers of different lengths were passed where equal lengths are needed.
+    LengthMismatch,
+    /// `step` was called after the last step.
+    Finished,
+}
+
+impl From<DmpError> for RdmpError {
+    fn from(e: DmpError) -> Self {
+        RdmpError::Dmp(e)
+    }
+}
+
+/// Increment of γ between two configurations (trapezoid rule for ∫ Mᵀ(q) dq, Eq. 22).
+#[inline]
+fn gamma_increment(m0: &JointVector, m1: &JointVector, q0: &JointVector, q1: &JointVector) -> f64 {
+    0.5 * (m0 + m1).dot(&(q1 - q0))
+}
+
+/// Alg. 1, lines 3–13: the compact null-space coordinate γ_k along a sampled joint trajectory,
+/// written to `gamma` (same length as `q`), γ_0 = 0.
+pub fn null_space_coordinate(
+    model: &RobotModel,
+    q: &[[f64; NA]],
+    min_manipulability: f64,
+    gamma: &mut [f64],
+) -> Result<(), RdmpError> {
+    if gamma.len() != q.len() {
+        return Err(RdmpError::LengthMismatch);
+    }
+    let mut prev: Option<(JointVector, JointVector)> = None;
+    let mut acc = 0.0;
+    for (k, (qk, g)) in q.iter().zip(gamma.iter_mut()).enumerate() {
+        if qk.iter().any(|v| !v.is_finite()) {
+            return Err(RdmpError::NonFinite { step: k });
+        }
+        let qv = JointVector::from(*qk);
+        let ker = kernel(&ArmKinematics::new(model, &qv).jacobian(model));
+        if !(ker.manipulability >= min_manipulability) {
+            return Err(RdmpError::SingularDemonstration {
+                sample: k,
+                manipulability: ker.manipulability,
+            });
+        }
+        if let Some((m0, q0)) = prev {
+            acc += gamma_increment(&m0, &ker.direction, &q0, &qv);
+        }
+        *g = acc;
+        prev = Some((ker.direction, qv));
+    }
+    Ok(())
+}
+
+impl Rdmp {
+    /// TrainRDMP (Alg. 1) on a joint-space demonstration `q` sampled every `dt` seconds, with
+    /// its null-space coordinate `gamma` from [`null_space_coordinate`].
+    pub fn train(
+        model: &RobotModel,
+        q: &[[f64; NA]],
+        gamma: &[f64],
+        dt: f64,
+        params: &DmpParams,
+    ) -> Result<Self, RdmpError> {
+        let n = q.len();
+        if gamma.len() != n {
+            return Err(RdmpError::LengthMismatch);
+        }
+        if n < MIN_SAMPLES {
+            return Err(DmpError::TooFewSamples {
+                got: n,
+                need: MIN_SAMPLES,
+            }
+            .into());
+        }
+        if let Some(k) = q.iter().position(|s| s.iter().any(|v| !v.is_finite())) {
+            return Err(RdmpError::NonFinite { step: k });
+        }
+        let tcp = |k: usize| ArmKinematics::new(model, &JointVector::from(q[k])).tcp;
+        let position = PositionDmp::train(params, dt, n, |k| tcp(k).translation.vector)?;
+        let rotation = RotationDmp::train(params, dt, n, |k| tcp(k).rotation)?;
+        let gamma_dmp = PositionDmp::train(params, dt, n, |k| Vector1::new(gamma[k]))?;
+        Ok(Rdmp {
+            position,
+            rotation,
+            gamma: gamma_dmp,
+            gamma_goal: gamma[n - 1],
+        })
+    }
+
+    /// Demonstrated duration τ, s.
+    pub fn duration(&self) -> f64 {
+        self.position.tau
+    }
+}
+
+/// One integration step's output: the joint setpoint at step `step`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RdmpStep {
+    /// Step index k of `q` (time kΔt).
+    pub step: usize,
+    pub q: JointVector,
+    /// Joint velocity that led from step k−1 to k.
+    pub qd: JointVector,
+    /// γ of the DMP at step k−1 and as measured along the path up to k−1.
+    pub gamma_dmp: f64,
+    pub gamma_measured: f64,
+    /// Manipulability at step k−1.
+    pub manipulability: f64,
+}
+
+/// IntegrateRDMP (Alg. 2) one step at a time: the executor's per-tick state.
+#[derive(Clone, Copy, Debug)]
+pub struct RdmpRun {
+    q: JointVector,
+    position: PositionState<3>,
+    rotation: RotationState,
+    gamma: PositionState<1>,
+    phase: Phase,
+    gamma_measured: f64,
+    /// (M, q) of the previous step, for the trapezoid γ measurement.
+    previous: Option<(JointVector, JointVector)>,
+}
+
+impl RdmpRun {
+    /// Starts an integration from joint configuration `q0` towards the TCP goal `goal`
+    /// (arm base frame).
+    pub fn new(
+        model: &RobotModel,
+        rdmp: &Rdmp,
+        q0: &JointVector,
+        goal: &Pose,
+        cfg: &RdmpConfig,
+    ) -> Result<Self, RdmpError> {
+        if q0.iter().any(|v| !v.is_finite()) || !(cfg.gain >= 0.0 && cfg.gain * cfg.dt < 1.0) {
+            return Err(RdmpError::NonFinite { step: 0 });
+        }
+        let start = ArmKinematics::new(model, q0).tcp;
+        let (position, phase) =
+            rdmp.position
+                .start(&start.translation.vector, &goal.translation.vector, cfg.dt)?;
+        let (rotation, _) = rdmp
+            .rotation
+            .start(&start.rotation, &goal.rotation, cfg.dt)?;
+        let (gamma, _) =
+            rdmp.gamma
+                .start(&Vector1::zeros(), &Vector1::new(rdmp.gamma_goal), cfg.dt)?;
+        Ok(RdmpRun {
+            q: *q0,
+            position,
+            rotation,
+            gamma,
+            phase,
+            gamma_measured: 0.0,
+            previous: None,
+        })
+    }
+
+    /// Current joint configuration.
+    pub fn q(&self) -> &JointVector {
+        &self.q
+    }
+
+    /// Current TCP pose of the task-space DMPs (arm base frame).
+    pub fn dmp_pose(&self) -> Pose {
+        Isometry3::from_parts(Translation3::from(self.position.y), self.rotation.r)
+    }
+
+    /// Number of steps of the whole motion and the steps done so far.
+    pub fn progress(&self) -> (usize, usize) {
+        (self.phase.step, self.phase.n_steps)
+    }
+
+    pub fn finished(&self) -> bool {
+        self.phase.finished()
+    }
+
+    /// Advances one step Δt (Alg. 2, lines 14–23, closed loop).
+    pub fn step(
+        &mut self,
+        model: &RobotModel,
+        rdmp: &Rdmp,
+        cfg: &RdmpConfig,
+    ) -> Result<RdmpStep, RdmpError> {
+        let k = self.phase.step;
+        if self.phase.finished() {
+            return Err(RdmpError::Finished);
+        }
+        let kin = ArmKinematics::new(model, &self.q);
+        let jac = kin.jacobian(model);
+        let ker = kernel(&jac);
+        if !(ker.manipulability >= cfg.min_manipulability) {
+            return Err(RdmpError::Singular {
+                step: k,
+                manipulability: ker.manipulability,
+            });
+        }
+        if let Some((m0, q0)) = self.previous {
+            self.gamma_measured += gamma_increment(&m0, &ker.direction, &q0, &self.q);
+        }
+        let (e_p, e_r) = pose_error(&self.dmp_pose(), &kin.tcp);
+        let gamma_dmp = self.gamma.y[0];
+        let v = self.position.step(
+            &rdmp.position.params,
+            &rdmp.position.forcing,
+            rdmp.position.tau,
+            cfg.dt,
+            &self.phase,
+        );
+        let w = self.rotation.step(
+            &rdmp.rotation.params,
+            &rdmp.rotation.forcing,
+            rdmp.rotation.tau,
+            cfg.dt,
+            &self.phase,
+        );
+        let g = self.gamma.step(
+            &rdmp.gamma.params,
+            &rdmp.gamma.forcing,
+            rdmp.gamma.tau,
+            cfg.dt,
+            &self.phase,
+        );
+        self.phase.advance();
+        let twist = join(&(v + e_p * cfg.gain), &(w + e_r * cfg.gain));
+        let gamma_rate = g[0] + cfg.gain * (gamma_dmp - self.gamma_measured);
+        let qd = pinv_apply(&jac, &twist).ok_or(RdmpError::Singular {
+            step: k,
+            manipulability: ker.manipulability,
+        })? + ker.direction * gamma_rate;
+        let q = self.q + qd * cfg.dt;
+        if q.iter().any(|v| !v.is_finite()) {
+            return Err(RdmpError::NonFinite { step: k + 1 });
+        }
+        if let Some((joint, value)) = model.limit_violation(&q.into()) {
+            return Err(RdmpError::JointLimit {
+                step: k + 1,
+                joint,
+                value,
+            });
+        }
+        self.previous = Some((ker.direction, self.q));
+        self.q = q;
+        Ok(RdmpStep {
+            step: k + 1,
+            q,
+            qd,
+            gamma_dmp,
+            gamma_measured: self.gamma_measured,
+            manipulability: ker.manipulability,
+        })
+    }
+}
+
+/// Stacks [v; ω].
+#[inline]
+fn join(v: &Vector3<f64>, w: &Vector3<f64>) -> Vector6<f64> {
+    Vector6::new(v.x, v.y, v.z, w.x, w.y, w.z)
+}
+
+/// IntegrateRDMP (Alg. 2) as a whole trajectory: calls `out` for every step after q0 and
+/// returns the final configuration.
+pub fn integrate(
+    model: &RobotModel,
+    rdmp: &Rdmp,
+    q0: &JointVector,
+    goal: &Pose,
+    cfg: &RdmpConfig,
+    mut out: impl FnMut(&RdmpStep),
+) -> Result<JointVector, RdmpError> {
+    let mut run = RdmpRun::new(model, rdmp, q0, goal, cfg)?;
+    while !run.finished() {
+        out(&run.step(model, rdmp, cfg)?);
+    }
+    Ok(*run.q())
+}

@@ -1,0 +1,163 @@
+//! The robot model as plain data: fixed joint transforms, axes, limits, collision spheres.
+//!
+//! A later tool fills [`RobotModel`] from a URDF plus a sphere file; [`RobotModel::kmr_iiwa14`]
+//! is the built-in default, a KUKA KMR iiwa: KMP 200 platform with an LBR iiwa 14 R820 and a
+//! parallel gripper. Frames (DESIGN.md): base `b` on the floor under the platform centre, arm
+//! base (URDF `link_0`) on the platform deck, links 1..7, flange, TCP `e`.
+
+use crate::NA;
+use crate::se3::{Pose, pose_from_xyz_rpy};
+use nalgebra::{Unit, Vector3};
+
+/// Maximum number of collision spheres of a model.
+pub const MAX_SPHERES: usize = 48;
+
+/// Index of the arm base frame (URDF `link_0`) in link-indexed data.
+pub const LINK_ARM_BASE: usize = 0;
+/// Index of the tool frame (the flange; the gripper is rigidly attached to it).
+pub const LINK_TOOL: usize = NA + 1;
+/// Number of frames returned by forward kinematics: arm base, links 1..=7, tool (flange).
+pub const N_FRAMES: usize = NA + 2;
+
+/// One revolute joint: `T_i^{i−1} = origin · Rot(axis, q_i)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Joint {
+    /// Fixed transform of the joint frame in the parent link frame (URDF `<origin>`).
+    pub origin: Pose,
+    /// Rotation axis in the joint frame (URDF `<axis>`).
+    pub axis: Unit<Vector3<f64>>,
+    /// Position limits, rad.
+    pub lower: f64,
+    pub upper: f64,
+    /// Speed limit, rad/s.
+    pub max_speed: f64,
+}
+
+/// A collision sphere rigidly attached to one frame (see [`LINK_ARM_BASE`], [`LINK_TOOL`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Frame index: 0 = arm base, 1..=7 = links, 8 = tool (flange).
+    pub link: u8,
+    /// Centre in that frame, m.
+    pub centre: Vector3<f64>,
+    /// Radius, m.
+    pub radius: f64,
+}
+
+/// The mobile platform's body as an axis-aligned box in the base frame `b`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlatformBox {
+    pub centre: Vector3<f64>,
+    pub half_extents: Vector3<f64>,
+}
+
+/// Kinematic and collision model of a mobile manipulator with a 7-axis arm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobotModel {
+    /// Arm base (URDF `link_0`) in the platform base frame `b`.
+    pub mount: Pose,
+    pub joints: [Joint; NA],
+    /// Flange in the frame of link 7.
+    pub flange: Pose,
+    /// TCP `e` in the flange frame.
+    pub tcp: Pose,
+    /// Conservative collision geometry: every point of the real link surface lies inside the
+    /// union of the spheres of its link. Sphere centres are the risk control points.
+    pub spheres: heapless::Vec<Sphere, MAX_SPHERES>,
+    pub platform: PlatformBox,
+    /// Home configuration q_a,H of the arm.
+    pub home: [f64; NA],
+}
+
+/// LBR iiwa 14 R820 joint origins (URDF: xyz, rpy), all axes z.
+const IIWA14_JOINTS: [([f64; 3], [f64; 3]); NA] = {
+    use core::f64::consts::{FRAC_PI_2 as H, PI};
+    [
+        ([0.0, 0.0, 0.1575], [0.0, 0.0, 0.0]),
+        ([0.0, 0.0, 0.2025], [H, 0.0, PI]),
+        ([0.0, 0.2045, 0.0], [H, 0.0, PI]),
+        ([0.0, 0.0, 0.2155], [H, 0.0, 0.0]),
+        ([0.0, 0.1845, 0.0], [-H, PI, 0.0]),
+        ([0.0, 0.0, 0.2155], [H, 0.0, 0.0]),
+        ([0.0, 0.081, 0.0], [-H, PI, 0.0]),
+    ]
+};
+/// Position limits ±deg and speed limits deg/s of the iiwa 14 R820.
+const IIWA14_LIMIT_DEG: [f64; NA] = [170.0, 120.0, 170.0, 120.0, 170.0, 120.0, 175.0];
+const IIWA14_SPEED_DEG: [f64; NA] = [85.0, 85.0, 100.0, 75.0, 130.0, 135.0, 135.0];
+
+/// Collision spheres (frame, centre, radius), m. Links 0..=7 were fitted to the iiwa 14 STL
+/// meshes by `tools/fit_spheres.py` (every triangle inside one sphere, 2 mm margin; verified by
+/// the test `spheres_cover_meshes`). Frame 8 covers the project's parallel gripper envelope:
+/// body cylinder r = 0.045, z ∈ [0, 0.09], and two fingers 0.015 × 0.024 × 0.07 at x = ±0.0375,
+/// z ∈ [0.09, 0.16] (flange frame).
+#[rustfmt::skip]
+const IIWA14_SPHERES: [(u8, [f64; 3], f64); 27] = [
+    (0, [-0.034, 0.006, 0.078], 0.149), (0, [0.025, -0.007, 0.077], 0.149),
+    (1, [-0.001, 0.002, 0.042], 0.103), (1, [0.001, -0.028, 0.129], 0.106),
+    (1, [0.002, -0.058, 0.217], 0.111),
+    (2, [0.000, -0.016, 0.061], 0.115), (2, [0.000, 0.075, 0.062], 0.107),
+    (2, [0.000, 0.149, 0.008], 0.097),
+    (3, [0.000, 0.001, 0.050], 0.088), (3, [0.000, 0.038, 0.131], 0.088),
+    (3, [0.000, 0.057, 0.217], 0.092),
+    (4, [0.000, 0.140, 0.005], 0.088), (4, [-0.001, 0.070, 0.042], 0.089),
+    (4, [0.000, -0.008, 0.053], 0.093),
+    (5, [0.000, -0.001, 0.040], 0.082), (5, [0.000, 0.038, 0.114], 0.082),
+    (5, [-0.001, 0.077, 0.201], 0.071),
+    (6, [0.000, 0.028, -0.008], 0.087), (6, [0.000, -0.034, 0.004], 0.087),
+    (7, [-0.014, 0.000, 0.018], 0.061), (7, [0.015, 0.000, 0.018], 0.060),
+    (8, [0.0, 0.0, 0.0225], 0.051), (8, [0.0, 0.0, 0.0675], 0.051),
+    (8, [0.0375, 0.0, 0.1075], 0.023), (8, [0.0375, 0.0, 0.1425], 0.023),
+    (8, [-0.0375, 0.0, 0.1075], 0.023), (8, [-0.0375, 0.0, 0.1425], 0.023),
+];
+
+impl RobotModel {
+    /// The built-in KMR iiwa with an LBR iiwa 14 R820 and a parallel gripper.
+    ///
+    /// Project choices (not vendor data): arm mounted at (0.33, 0, 0.70) on the KMP 200 deck
+    /// (box 1.08 × 0.63 × 0.70 m), flange 0.045 m beyond joint 7, TCP 0.15 m beyond the flange
+    /// between the finger pads, home q_a,H folded over the platform.
+    pub fn kmr_iiwa14() -> Self {
+        let joints = core::array::from_fn(|i| {
+            let (xyz, rpy) = IIWA14_JOINTS[i];
+            Joint {
+                origin: pose_from_xyz_rpy(xyz, rpy),
+                axis: Vector3::z_axis(),
+                lower: -IIWA14_LIMIT_DEG[i].to_radians(),
+                upper: IIWA14_LIMIT_DEG[i].to_radians(),
+                max_speed: IIWA14_SPEED_DEG[i].to_radians(),
+            }
+        });
+        let mut spheres = heapless::Vec::new();
+        for &(link, c, radius) in &IIWA14_SPHERES {
+            // Capacity 48 > 27 entries: cannot fail.
+            let _ = spheres.push(Sphere {
+                link,
+                centre: Vector3::new(c[0], c[1], c[2]),
+                radius,
+            });
+        }
+        let home_deg = [0.0, -30.0, 0.0, 100.0, 0.0, -50.0, 0.0];
+        RobotModel {
+            mount: pose_from_xyz_rpy([0.33, 0.0, 0.70], [0.0; 3]),
+            joints,
+            flange: pose_from_xyz_rpy([0.0, 0.0, 0.045], [0.0; 3]),
+            tcp: pose_from_xyz_rpy([0.0, 0.0, 0.15], [0.0; 3]),
+            spheres,
+            platform: PlatformBox {
+                centre: Vector3::new(0.0, 0.0, 0.35),
+                half_extents: Vector3::new(0.54, 0.315, 0.35),
+            },
+            home: home_deg.map(|d: f64| d.to_radians()),
+        }
+    }
+
+    /// First joint whose value is outside its position limits, with the value.
+    pub fn limit_violation(&self, q: &[f64; NA]) -> Option<(usize, f64)> {
+        self.joints
+            .iter()
+            .zip(q)
+            .position(|(j, &v)| !(v >= j.lower && v <= j.upper))
+            .map(|i| (i, q[i]))
+    }
+}
