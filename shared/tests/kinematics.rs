@@ -34,7 +34,10 @@ fn fk_matches_pybullet() {
             let dp = (f.translation.vector - p).norm();
             let dr = log(&(f.rotation * rot.inverse())).norm();
             // Bullet stores link frames in single precision in places: 1e-6 m / 1e-6 rad.
-            assert!(dp < 1e-6 && dr < 1e-6, "link {link} q={q:?}: {dp} m, {dr} rad");
+            assert!(
+                dp < 1e-6 && dr < 1e-6,
+                "link {link} q={q:?}: {dp} m, {dr} rad"
+            );
         }
     }
 }
@@ -68,14 +71,17 @@ fn flange_matches_dh_model() {
     // same joint angles and signs).
     let offset = {
         let ours = ArmKinematics::new(&model, &JointVector::zeros()).frames[LINK_TOOL];
-        ours.rotation.to_rotation_matrix().matrix().transpose() * dh_flange(&JointVector::zeros()).fixed_view::<3, 3>(0, 0)
+        ours.rotation.to_rotation_matrix().matrix().transpose()
+            * dh_flange(&JointVector::zeros()).fixed_view::<3, 3>(0, 0)
     };
     for _ in 0..200 {
         let q = random_q(&mut rng, &model);
         let dh = dh_flange(&q);
         let ours = ArmKinematics::new(&model, &q).frames[LINK_TOOL];
         let dp = (ours.translation.vector - dh.fixed_view::<3, 1>(0, 3)).norm();
-        let dr = (ours.rotation.to_rotation_matrix().matrix() * offset - dh.fixed_view::<3, 3>(0, 0)).norm();
+        let dr = (ours.rotation.to_rotation_matrix().matrix() * offset
+            - dh.fixed_view::<3, 3>(0, 0))
+        .norm();
         assert!(dp < 1e-12 && dr < 1e-12, "q={q:?}: {dp} m, {dr}");
     }
 }
@@ -92,7 +98,10 @@ fn jacobian_matches_finite_differences() {
             let (mut qp, mut qm) = (q, q);
             qp[i] += h;
             qm[i] -= h;
-            let (tp, tm) = (ArmKinematics::new(&model, &qp).tcp, ArmKinematics::new(&model, &qm).tcp);
+            let (tp, tm) = (
+                ArmKinematics::new(&model, &qp).tcp,
+                ArmKinematics::new(&model, &qm).tcp,
+            );
             let v = (tp.translation.vector - tm.translation.vector) / (2.0 * h);
             let w = log(&(tp.rotation * tm.rotation.inverse())) / (2.0 * h);
             let col = jac.column(i);
@@ -121,7 +130,11 @@ fn spheres_cover_meshes() {
         let link = r[0] as u8;
         per_link[link as usize] += 1;
         let s = slack(&model, link, Vector3::new(r[1], r[2], r[3]));
-        assert!(s >= 0.0, "link {link} point {r:?} outside its spheres by {:.4} m", -s);
+        assert!(
+            s >= 0.0,
+            "link {link} point {r:?} outside its spheres by {:.4} m",
+            -s
+        );
     }
     assert!(per_link.iter().all(|&n| n >= 200), "{per_link:?}");
 }
@@ -165,7 +178,10 @@ fn platform_and_mount_compose() {
     let base = platform_pose(q_m);
     // The arm sits 0.33 m ahead of the platform centre: with yaw 90° that is +y in the world.
     let arm = arm_base_pose(&model, q_m).translation.vector;
-    assert!((arm - Vector3::new(1.0, -2.0 + 0.33, 0.70)).norm() < 1e-12, "{arm:?}");
+    assert!(
+        (arm - Vector3::new(1.0, -2.0 + 0.33, 0.70)).norm() < 1e-12,
+        "{arm:?}"
+    );
     assert!((base.translation.vector - Vector3::new(1.0, -2.0, 0.0)).norm() < 1e-12);
 }
 
@@ -179,7 +195,12 @@ fn limits_are_the_iiwa14_datasheet() {
         assert!((model.joints[i].lower + f64::to_radians(lim[i])).abs() < 1e-15);
         assert!((model.joints[i].max_speed - f64::to_radians(speed[i])).abs() < 1e-15);
     }
-    assert_eq!(model.limit_violation(&deg([0.0, 121.0, 0.0, 0.0, 0.0, 0.0, 0.0]).into()).map(|v| v.0), Some(1));
+    assert_eq!(
+        model
+            .limit_violation(&deg([0.0, 121.0, 0.0, 0.0, 0.0, 0.0, 0.0]).into())
+            .map(|v| v.0),
+        Some(1)
+    );
     assert_eq!(model.limit_violation(&[f64::NAN; NA]).map(|v| v.0), Some(0));
     assert!(model.limit_violation(&model.home).is_none());
 }

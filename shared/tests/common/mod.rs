@@ -15,7 +15,13 @@ pub fn min_jerk(u: f64) -> f64 {
 
 /// A smooth joint-space demonstration from `a` to `b` with an elbow-swivel bump on joint 3
 /// (null-space motion) of `bump` rad, sampled every `dt` over `duration` seconds.
-pub fn joint_demo(a: JointVector, b: JointVector, bump: f64, duration: f64, dt: f64) -> Vec<[f64; NA]> {
+pub fn joint_demo(
+    a: JointVector,
+    b: JointVector,
+    bump: f64,
+    duration: f64,
+    dt: f64,
+) -> Vec<[f64; NA]> {
     let n = (duration / dt).round() as usize + 1;
     (0..n)
         .map(|k| {
@@ -36,7 +42,11 @@ pub fn fixture(name: &str) -> Vec<Vec<f64>> {
         .filter(|(_, l)| !l.starts_with('#') && !l.trim().is_empty())
         .map(|(i, l)| {
             l.split(',')
-                .map(|v| v.trim().parse().unwrap_or_else(|_| panic!("{path}:{}: bad number {v:?}", i + 1)))
+                .map(|v| {
+                    v.trim()
+                        .parse()
+                        .unwrap_or_else(|_| panic!("{path}:{}: bad number {v:?}", i + 1))
+                })
                 .collect()
         })
         .collect()

@@ -1,0 +1,181 @@
+//! DMPs (Sec. 3.2): reproduction, generalisation to new goals, SO(3) past 180°, bad input.
+
+mod common;
+
+use nalgebra::{SVector, UnitQuaternion, Vector3};
+use prf_shared::dmp::{DmpError, DmpParams, PositionDmp, RotationDmp};
+use prf_shared::se3::{Rot, exp, log};
+
+const DEMO_DT: f64 = 0.01; // 100 Hz, the dataset's rate
+const RUN_DT: f64 = 0.001; // 1 kHz, the executor's tick
+
+/// A smooth 3-D demonstration of 2 s: a curved reach with a lift.
+fn demo_point(t: f64) -> Vector3<f64> {
+    let s = common::min_jerk(t / 2.0);
+    Vector3::new(
+        0.6 * s + 0.05 * (std::f64::consts::PI * s).sin(),
+        -0.3 * s + 0.1 * (2.0 * std::f64::consts::PI * s).sin(),
+        0.2 * (std::f64::consts::PI * s).sin() + 0.15 * s,
+    )
+}
+
+fn train_position() -> PositionDmp<3> {
+    PositionDmp::train(&DmpParams::default(), DEMO_DT, 201, |k| {
+        demo_point(k as f64 * DEMO_DT)
+    })
+    .unwrap()
+}
+
+#[test]
+fn position_dmp_reproduces_demonstration() {
+    let dmp = train_position();
+    let mut out = vec![SVector::<f64, 3>::zeros(); 2001];
+    let n = dmp
+        .integrate(&demo_point(0.0), &demo_point(2.0), RUN_DT, &mut out)
+        .unwrap();
+    assert_eq!(n, 2001);
+    let sq: f64 = (0..n)
+        .map(|k| (out[k] - demo_point(k as f64 * RUN_DT)).norm_squared())
+        .sum();
+    let rmse = (sq / n as f64).sqrt();
+    println!("position DMP reproduction RMSE {:.3e} m", rmse);
+    assert!(rmse < 1e-3, "RMSE {rmse} m");
+    assert!((out[n - 1] - demo_point(2.0)).norm() < 1e-3);
+}
+
+#[test]
+fn position_dmp_reaches_new_goals() {
+    let dmp = train_position();
+    let mut out = vec![SVector::<f64, 3>::zeros(); 2001];
+    for offset in [
+        Vector3::new(0.1, 0.0, 0.0),
+        Vector3::new(-0.1, 0.1, -0.05),
+        Vector3::new(0.0, -0.1, 0.1),
+    ] {
+        let goal = demo_point(2.0) + offset;
+        let n = dmp
+            .integrate(&demo_point(0.0), &goal, RUN_DT, &mut out)
+            .unwrap();
+        let err = (out[n - 1] - goal).norm();
+        assert!(err < 1e-3, "offset {offset:?}: end error {err} m");
+    }
+}
+
+#[test]
+fn guard_keeps_zero_amplitude_coordinates_finite() {
+    // y returns to its start (g − y0 = 0): the forcing term must be learned unscaled.
+    let f = |k: usize| {
+        let s = common::min_jerk(k as f64 / 200.0);
+        SVector::<f64, 1>::new(0.2 * (std::f64::consts::PI * s).sin())
+    };
+    let dmp = PositionDmp::train(&DmpParams::default(), DEMO_DT, 201, f).unwrap();
+    assert!(!dmp.forcing.scaled[0]);
+    let mut out = vec![SVector::<f64, 1>::zeros(); 2001];
+    dmp.integrate(&f(0), &f(200), RUN_DT, &mut out).unwrap();
+    let max_err = (0..2001)
+        .map(|k| {
+            (out[k][0]
+                - f(0)[0]
+                - 0.2 * (std::f64::consts::PI * common::min_jerk(k as f64 / 2000.0)).sin())
+            .abs()
+        })
+        .fold(0.0, f64::max);
+    assert!(max_err < 1e-3, "{max_err}");
+}
+
+/// 270° about a slowly tilting axis, plus a small wobble: more than 180° of total travel.
+fn demo_rotation(t: f64) -> Rot {
+    let s = common::min_jerk(t / 2.0);
+    let axis = Vector3::new(0.2 * s, 0.1, 1.0).normalize();
+    exp(&(axis * (1.5 * std::f64::consts::PI * s)))
+        * exp(&(Vector3::x() * 0.2 * (std::f64::consts::PI * s).sin()))
+}
+
+#[test]
+fn rotation_dmp_reproduces_beyond_180_degrees_without_flips() {
+    let dmp = RotationDmp::train(&DmpParams::default(), DEMO_DT, 201, |k| {
+        demo_rotation(k as f64 * DEMO_DT)
+    })
+    .unwrap();
+    assert!(
+        dmp.travel.norm() > std::f64::consts::PI,
+        "travel {} rad was wrapped",
+        dmp.travel.norm()
+    );
+    let mut out = vec![UnitQuaternion::identity(); 2001];
+    let n = dmp
+        .integrate(&demo_rotation(0.0), &demo_rotation(2.0), RUN_DT, &mut out)
+        .unwrap();
+    let mut max_err: f64 = 0.0;
+    let mut max_step: f64 = 0.0;
+    for k in 0..n {
+        max_err = max_err.max(log(&(out[k] * demo_rotation(k as f64 * RUN_DT).inverse())).norm());
+        if k > 0 {
+            max_step = max_step.max(log(&(out[k] * out[k - 1].inverse())).norm());
+        }
+    }
+    println!(
+        "rotation DMP: max error {:.3e} rad, max step {:.3e} rad",
+        max_err, max_step
+    );
+    assert!(
+        max_err < 1e-3_f64.max(0.1f64.to_radians()),
+        "max error {max_err} rad"
+    );
+    // 270° in 2 s peaks near 4.4 rad/s: 1 ms steps stay below 5 mrad; a flip would be ~π.
+    assert!(max_step < 0.005, "discontinuity of {max_step} rad");
+    assert!(log(&(out[n - 1] * demo_rotation(2.0).inverse())).norm() < 1e-3);
+}
+
+#[test]
+fn rotation_dmp_reaches_new_goal() {
+    let dmp = RotationDmp::train(&DmpParams::default(), DEMO_DT, 201, |k| {
+        demo_rotation(k as f64 * DEMO_DT)
+    })
+    .unwrap();
+    let goal = exp(&Vector3::new(0.2, -0.1, 0.15)) * demo_rotation(2.0);
+    let mut out = vec![UnitQuaternion::identity(); 2001];
+    let n = dmp
+        .integrate(&demo_rotation(0.0), &goal, RUN_DT, &mut out)
+        .unwrap();
+    assert!(log(&(out[n - 1] * goal.inverse())).norm() < 0.5f64.to_radians());
+}
+
+#[test]
+fn bad_input_gives_typed_errors() {
+    let p = DmpParams::default();
+    let nan = PositionDmp::train(&p, DEMO_DT, 50, |k| {
+        if k == 7 {
+            SVector::<f64, 1>::new(f64::NAN)
+        } else {
+            SVector::<f64, 1>::new(k as f64)
+        }
+    });
+    assert!(matches!(nan, Err(DmpError::NonFinite { .. })), "{nan:?}");
+    assert_eq!(
+        PositionDmp::train(&p, DEMO_DT, 3, |_| SVector::<f64, 1>::zeros()).unwrap_err(),
+        DmpError::TooFewSamples { got: 3, need: 5 }
+    );
+    let bad = DmpParams { n_basis: 500, ..p };
+    assert_eq!(
+        PositionDmp::train(&bad, DEMO_DT, 50, |_| SVector::<f64, 1>::zeros()).unwrap_err(),
+        DmpError::BadParams
+    );
+    let dmp = train_position();
+    let mut short = vec![SVector::<f64, 3>::zeros(); 10];
+    assert_eq!(
+        dmp.integrate(&demo_point(0.0), &demo_point(2.0), RUN_DT, &mut short)
+            .unwrap_err(),
+        DmpError::BufferTooSmall { need: 2001 }
+    );
+    let nan_goal = Vector3::new(f64::NAN, 0.0, 0.0);
+    assert!(matches!(
+        dmp.integrate(&demo_point(0.0), &nan_goal, RUN_DT, &mut short),
+        Err(DmpError::NonFinite { .. })
+    ));
+    assert_eq!(
+        dmp.integrate(&demo_point(0.0), &demo_point(2.0), 0.0, &mut short)
+            .unwrap_err(),
+        DmpError::BadParams
+    );
+}

@@ -1,0 +1,213 @@
+//! RDMPs (Alg. 1 and 2) on joint-space demonstrations of the iiwa 14.
+
+mod common;
+
+use common::{deg, joint_demo};
+use nalgebra::{Isometry3, Translation3, Vector3};
+use prf_shared::dmp::DmpParams;
+use prf_shared::kinematics::ArmKinematics;
+use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpError, RdmpRun, integrate, null_space_coordinate};
+use prf_shared::robot::RobotModel;
+use prf_shared::se3::{exp, log};
+use prf_shared::{JointVector, NA};
+
+const DEMO_DT: f64 = 0.01;
+
+struct Fixture {
+    model: RobotModel,
+    demo: Vec<[f64; NA]>,
+    gamma: Vec<f64>,
+    rdmp: Rdmp,
+    cfg: RdmpConfig,
+}
+
+/// A 2.5 s reach from a folded pose to a table-height grasp with an elbow swivel on the way;
+/// the grasp sits mid-workspace (shoulder–wrist 0.6 of 0.82 m; q4 stays ≥ 35° from its limit) so ±10 cm goals are reachable.
+fn fixture() -> Fixture {
+    let model = RobotModel::kmr_iiwa14();
+    let cfg = RdmpConfig::default();
+    let demo = joint_demo(
+        deg([-40.0, 20.0, 10.0, -80.0, 10.0, 50.0, -20.0]),
+        deg([20.0, 42.0, -15.0, -85.0, -20.0, 60.0, 30.0]),
+        0.5,
+        2.5,
+        DEMO_DT,
+    );
+    let mut gamma = vec![0.0; demo.len()];
+    null_space_coordinate(&model, &demo, cfg.min_manipulability, &mut gamma).unwrap();
+    let rdmp = Rdmp::train(&model, &demo, &gamma, DEMO_DT, &DmpParams::default()).unwrap();
+    Fixture {
+        model,
+        demo,
+        gamma,
+        rdmp,
+        cfg,
+    }
+}
+
+fn tcp(model: &RobotModel, q: &JointVector) -> Isometry3<f64> {
+    ArmKinematics::new(model, q).tcp
+}
+
+#[test]
+fn reproduces_its_demonstration() {
+    let f = fixture();
+    let q0 = JointVector::from(f.demo[0]);
+    let goal = tcp(&f.model, &JointVector::from(*f.demo.last().unwrap()));
+    let ratio = (DEMO_DT / f.cfg.dt).round() as usize;
+    let (mut sq, mut max, mut count) = (0.0, 0.0f64, 0usize);
+    let mut gamma_gap = 0.0f64;
+    integrate(&f.model, &f.rdmp, &q0, &goal, &f.cfg, |s| {
+        if s.step % ratio == 0 {
+            let d = s.q - JointVector::from(f.demo[s.step / ratio]);
+            sq += d.norm_squared() / NA as f64;
+            max = max.max(d.amax());
+            count += 1;
+        }
+        gamma_gap = gamma_gap.max((s.gamma_dmp - s.gamma_measured).abs());
+    })
+    .unwrap();
+    let rmse = (sq / count as f64).sqrt();
+    println!(
+        "RDMP reproduction: joint RMSE {rmse:.2e} rad, max {max:.2e} rad, γ gap {gamma_gap:.1e}"
+    );
+    assert!(rmse < 1e-3 && max < 5e-3, "RMSE {rmse} rad, max {max} rad");
+    assert!(gamma_gap < 1e-3, "γ gap {gamma_gap}");
+}
+
+#[test]
+fn null_space_coordinate_follows_trained_gamma() {
+    // Recompute γ along the executed path with the training code (Alg. 1) and compare with
+    // the demonstration's γ(t): the swivel was reproduced, not just the TCP path.
+    let f = fixture();
+    assert!(
+        f.gamma.last().unwrap().abs() > 0.05
+            || f.gamma.iter().fold(0.0f64, |m, g| m.max(g.abs())) > 0.1,
+        "demo has no null-space motion"
+    );
+    let q0 = JointVector::from(f.demo[0]);
+    let goal = tcp(&f.model, &JointVector::from(*f.demo.last().unwrap()));
+    let ratio = (DEMO_DT / f.cfg.dt).round() as usize;
+    let mut path = vec![f.demo[0]];
+    integrate(&f.model, &f.rdmp, &q0, &goal, &f.cfg, |s| {
+        if s.step % ratio == 0 {
+            path.push(s.q.into());
+        }
+    })
+    .unwrap();
+    let mut gamma = vec![0.0; path.len()];
+    null_space_coordinate(&f.model, &path, f.cfg.min_manipulability, &mut gamma).unwrap();
+    let max = gamma
+        .iter()
+        .zip(&f.gamma)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    println!("γ along the executed path vs demonstration: max gap {max:.2e}");
+    assert!(max < 2e-3, "{max}");
+}
+
+#[test]
+fn reaches_new_goals_within_10_cm() {
+    // 26 directions (axes, edge and corner diagonals), each a goal 10 cm from the
+    // demonstrated one, with the goal orientation tilted by up to 0.1 rad as well.
+    let f = fixture();
+    let q0 = JointVector::from(f.demo[0]);
+    let demo_goal = tcp(&f.model, &JointVector::from(*f.demo.last().unwrap()));
+    let mut worst = (0.0f64, 0.0f64);
+    let mut count = 0;
+    for dx in [-1.0, 0.0, 1.0] {
+        for dy in [-1.0, 0.0, 1.0] {
+            for dz in [-1.0, 0.0, 1.0] {
+                let dir = Vector3::new(dx, dy, dz);
+                if dir.norm() == 0.0 {
+                    continue;
+                }
+                let offset = dir.normalize() * 0.1;
+                let tilt = exp(&(Vector3::new(dy, -dx, dz) * 0.1 / dir.norm()));
+                let goal = Isometry3::from_parts(
+                    Translation3::from(demo_goal.translation.vector + offset),
+                    tilt * demo_goal.rotation,
+                );
+                let q = integrate(&f.model, &f.rdmp, &q0, &goal, &f.cfg, |_| {})
+                    .unwrap_or_else(|e| panic!("goal offset {offset:?}: {e:?}"));
+                let end = tcp(&f.model, &q);
+                let dp = (end.translation.vector - goal.translation.vector).norm();
+                let dr = log(&(end.rotation * goal.rotation.inverse())).norm();
+                worst = (worst.0.max(dp), worst.1.max(dr));
+                count += 1;
+            }
+        }
+    }
+    assert_eq!(count, 26);
+    println!(
+        "new goals: worst end error {:.2e} m, {:.2e} deg",
+        worst.0,
+        worst.1.to_degrees()
+    );
+    assert!(worst.0 < 1e-3 && worst.1 < 0.5f64.to_radians(), "{worst:?}");
+}
+
+#[test]
+fn goal_through_a_singularity_is_reported() {
+    let f = fixture();
+    let q0 = JointVector::from(f.demo[0]);
+    let demo_goal = tcp(&f.model, &JointVector::from(*f.demo.last().unwrap()));
+    // 1.5 m further out: beyond the arm's 1.27 m reach, it must stretch through the boundary
+    // singularity (or hit a limit) and say so instead of integrating garbage.
+    let goal = Isometry3::from_parts(
+        Translation3::from(demo_goal.translation.vector + Vector3::new(1.5, 0.0, 0.0)),
+        demo_goal.rotation,
+    );
+    match integrate(&f.model, &f.rdmp, &q0, &goal, &f.cfg, |_| {}) {
+        Err(RdmpError::Singular {
+            manipulability,
+            step,
+        }) => {
+            assert!(manipulability < f.cfg.min_manipulability && step > 0);
+        }
+        other => panic!("expected a singularity error, got {other:?}"),
+    }
+}
+
+#[test]
+fn bad_input_gives_typed_errors() {
+    let f = fixture();
+    let goal = tcp(&f.model, &JointVector::from(*f.demo.last().unwrap()));
+    let nan = JointVector::from_element(f64::NAN);
+    assert!(matches!(
+        RdmpRun::new(&f.model, &f.rdmp, &nan, &goal, &f.cfg),
+        Err(RdmpError::NonFinite { .. })
+    ));
+    let mut bad_demo = f.demo.clone();
+    bad_demo[20][3] = f64::INFINITY;
+    let mut g = vec![0.0; bad_demo.len()];
+    assert_eq!(
+        null_space_coordinate(&f.model, &bad_demo, 0.01, &mut g),
+        Err(RdmpError::NonFinite { step: 20 })
+    );
+    assert_eq!(
+        null_space_coordinate(&f.model, &f.demo, 0.01, &mut g[1..]),
+        Err(RdmpError::LengthMismatch)
+    );
+    let stretched = vec![[0.0; NA]; 10];
+    let mut g = vec![0.0; 10];
+    assert!(matches!(
+        null_space_coordinate(&f.model, &stretched, 0.01, &mut g),
+        Err(RdmpError::SingularDemonstration { sample: 0, .. })
+    ));
+    let mut run = RdmpRun::new(
+        &f.model,
+        &f.rdmp,
+        &JointVector::from(f.demo[0]),
+        &goal,
+        &f.cfg,
+    )
+    .unwrap();
+    while !run.finished() {
+        run.step(&f.model, &f.rdmp, &f.cfg).unwrap();
+    }
+    assert_eq!(
+        run.step(&f.model, &f.rdmp, &f.cfg).unwrap_err(),
+        RdmpError::Finished
+    );
+}
