@@ -1,1 +1,35 @@
-fn main() {}
+//! `prf`: host tools of the PRF cell runtime.
+
+mod bench;
+mod demo;
+mod synthetic;
+
+use clap::{Parser, Subcommand};
+
+/// PRF — program a robot cell by reusing its old programs.
+///
+/// Without a subcommand, runs `prf demo`.
+#[derive(Parser)]
+#[command(version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Kinematics + RDMP demonstration on the built-in KMR iiwa 14: FK, null space, RDMP
+    /// training, reproduction and generalisation to new goals, singularity handling.
+    Demo(demo::Args),
+    /// Micro-benchmarks of the math core (medians, with the paper's SVD formulation as the
+    /// baseline in the same process).
+    Bench(bench::Args),
+}
+
+fn main() -> anyhow::Result<()> {
+    match Cli::parse().command {
+        None => demo::run(&demo::Args::default()),
+        Some(Command::Demo(args)) => demo::run(&args),
+        Some(Command::Bench(args)) => bench::run(&args),
+    }
+}

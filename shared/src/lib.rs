@@ -8,7 +8,8 @@
 //! - [`kinematics`]: forward kinematics of every link, TCP pose, geometric Jacobian;
 //! - [`nullspace`]: the sign-continuous compact null-space basis M(q) of Sec. 4.2.1;
 //! - [`dmp`]: DMPs of Sec. 3.2 (position in R^n, rotation on SO(3));
-//! - [`rdmp`]: redundancy DMPs, Alg. 1 (train) and Alg. 2 (integrate, one step per tick).
+//! - [`rdmp`]: redundancy DMPs, Alg. 1 (train) and Alg. 2 (integrate, one step per tick);
+//! - [`profile`], [`linalg`]: small helpers (time scaling, fixed-size solvers).
 //!
 //! Section, equation and algorithm numbers refer to Toner, Tilbury, Barton, "PRF: A Program
 //! Reuse Framework for Automated Programming by Learning from Existing Robot Programs",
@@ -19,6 +20,7 @@ pub mod dmp;
 pub mod kinematics;
 pub mod linalg;
 pub mod nullspace;
+pub mod profile;
 pub mod rdmp;
 pub mod robot;
 pub mod se3;

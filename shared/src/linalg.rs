@@ -1,40 +1,5 @@
-//! Small dense solvers on fixed-size arrays (no allocation): a 6×6 determinant for the
-//! null-space cofactors and a Cholesky factorisation for the DMP weight regression.
-
-/// Determinant of a 6×6 matrix by LU decomposition with partial pivoting.
-pub fn det6(mut a: [[f64; 6]; 6]) -> f64 {
-    let mut det = 1.0;
-    for c in 0..6 {
-        let mut p = c;
-        let mut best = libm::fabs(a[c][c]);
-        for (r, row) in a.iter().enumerate().skip(c + 1) {
-            let v = libm::fabs(row[c]);
-            if v > best {
-                best = v;
-                p = r;
-            }
-        }
-        if best == 0.0 {
-            return 0.0;
-        }
-        if p != c {
-            a.swap(p, c);
-            det = -det;
-        }
-        let pivot = a[c][c];
-        det *= pivot;
-        let inv = 1.0 / pivot;
-        for r in (c + 1)..6 {
-            let m = a[r][c] * inv;
-            if m != 0.0 {
-                for k in (c + 1)..6 {
-                    a[r][k] -= m * a[c][k];
-                }
-            }
-        }
-    }
-    det
-}
+//! Small dense solvers on fixed-size arrays (no allocation): the Cholesky factorisation of the
+//! DMP weight regression.
 
 /// The matrix handed to [`cholesky_factor`] is not (numerically) positive definite.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -87,23 +52,6 @@ pub fn cholesky_solve<const M: usize>(l: &[[f64; M]; M], n: usize, b: &mut [f64]
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn det6_matches_cofactor_structure() {
-        // Upper triangular with a row swap: det = −(product of diagonal).
-        let mut a = [[0.0; 6]; 6];
-        for (i, row) in a.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate() {
-                if j >= i {
-                    *v = (i + 2 * j + 1) as f64;
-                }
-            }
-        }
-        let diag: f64 = (0..6).map(|i| (3 * i + 1) as f64).product();
-        assert!((det6(a) - diag).abs() < 1e-9 * diag);
-        a.swap(1, 4);
-        assert!((det6(a) + diag).abs() < 1e-9 * diag);
-    }
 
     #[test]
     fn cholesky_solves_spd_system() {

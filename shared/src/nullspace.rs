@@ -2,56 +2,145 @@
 //!
 //! For J ∈ R^{6×7} of rank 6 the kernel is spanned by the generalized cross product of its
 //! rows, c_i = (−1)^i det(J without column i) (0-based i). Two facts make it the right basis:
-//! - J c = 0 (each row of J dotted with c is a determinant with a repeated row), and c is a
-//!   polynomial in J, so it is continuous along a trajectory: no arbitrary sign flip as with
-//!   the SVD basis of Alg. 1/2;
-//! - |c| = sqrt(det(J Jᵀ)) (Cauchy–Binet), Yoshikawa's manipulability: the singularity measure
-//!   comes for free.
+//! - c is a polynomial in J, so it is continuous along a trajectory: no arbitrary sign flip
+//!   as with the SVD basis of Alg. 1/2;
+//! - |c| = sqrt(det(J Jᵀ)) (Cauchy–Binet), Yoshikawa's manipulability: the singularity
+//!   measure comes for free.
 //!
 //! M(q) = c/|c| is then the orthonormal basis of Eq. (21), M⁺ = Mᵀ, and since M spans ker J,
 //! Eq. (22) reduces to γ̇ = Mᵀ q̇.
+//!
+//! c is computed from one Householder QR of Jᵀ = Q [R; 0] (Q = H_0 ⋯ H_5, 7×7): with
+//! q_7 = Q e_7, [J; q_7ᵀ]ᵀ = Q [[R, 0], [0, 1]], so det([J; q_7ᵀ]) = det Q · det R, and since
+//! det([J; cᵀ]) = |c|² > 0 the cofactor vector is c = det Q · det R · q_7. The same
+//! factorisation gives the minimum-norm solution J⁺V = Q [R⁻ᵀV; 0], so one QR per tick
+//! serves both M and J⁺ (Alg. 2, line 22).
 
-use crate::linalg::det6;
 use crate::{Jacobian, JointVector};
-use nalgebra::{Cholesky, Matrix6, Vector6};
+use nalgebra::Vector6;
+
+/// Relative size of R's smallest diagonal entry below which J counts as rank deficient.
+pub const RANK_TOLERANCE: f64 = 1e-10;
 
 /// Unit kernel direction M(q) and manipulability sqrt(det(J Jᵀ)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Kernel {
-    /// Unit vector spanning ker J (zero if J is rank deficient).
+    /// Unit vector spanning ker J, oriented as the generalized cross product (zero if J is
+    /// rank deficient).
     pub direction: JointVector,
     pub manipulability: f64,
 }
 
-/// Kernel of a 6×7 Jacobian by the generalized cross product of its rows.
-pub fn kernel(j: &Jacobian) -> Kernel {
-    let mut c = JointVector::zeros();
-    for skip in 0..7 {
-        let mut m = [[0.0; 6]; 6];
-        for (r, row) in m.iter_mut().enumerate() {
-            let mut k = 0;
-            for col in 0..7 {
-                if col != skip {
-                    row[k] = j[(r, col)];
-                    k += 1;
+/// Householder QR of Jᵀ (7×6).
+#[derive(Clone, Copy, Debug)]
+pub struct JacobianQr {
+    /// Householder vectors v_k (entries k..7 used), H_k = I − β_k v_k v_kᵀ.
+    v: [[f64; 7]; 6],
+    beta: [f64; 6],
+    /// Upper-triangular R, row-major.
+    r: [[f64; 6]; 6],
+    /// det Q = (−1)^(number of reflections applied).
+    det_q: f64,
+}
+
+impl JacobianQr {
+    pub fn new(j: &Jacobian) -> Self {
+        // a = Jᵀ, column-major by construction: a[c][row] is Jᵀ(row, c) = J(c, row).
+        let mut a = [[0.0; 7]; 6];
+        for (c, col) in a.iter_mut().enumerate() {
+            for (row, v) in col.iter_mut().enumerate() {
+                *v = j[(c, row)];
+            }
+        }
+        let mut v = [[0.0; 7]; 6];
+        let mut beta = [0.0; 6];
+        let mut r = [[0.0; 6]; 6];
+        let mut det_q = 1.0;
+        for k in 0..6 {
+            let norm = libm::sqrt(a[k][k..].iter().map(|x| x * x).sum::<f64>());
+            let alpha = if a[k][k] >= 0.0 { -norm } else { norm };
+            let vk = &mut v[k];
+            vk[k..].copy_from_slice(&a[k][k..]);
+            vk[k] -= alpha;
+            let vv: f64 = vk[k..].iter().map(|x| x * x).sum();
+            if vv > 0.0 {
+                beta[k] = 2.0 / vv;
+                det_q = -det_q;
+                for col in a.iter_mut().skip(k + 1) {
+                    let s = beta[k] * (k..7).map(|i| vk[i] * col[i]).sum::<f64>();
+                    for i in k..7 {
+                        col[i] -= s * vk[i];
+                    }
+                }
+            }
+            r[k][k] = if vv > 0.0 { alpha } else { a[k][k] };
+            for c in (k + 1)..6 {
+                r[k][c] = a[c][k];
+            }
+        }
+        JacobianQr { v, beta, r, det_q }
+    }
+
+    /// y ← Q y = H_0 ⋯ H_5 y.
+    fn apply_q(&self, y: &mut [f64; 7]) {
+        for k in (0..6).rev() {
+            if self.beta[k] != 0.0 {
+                let vk = &self.v[k];
+                let s = self.beta[k] * (k..7).map(|i| vk[i] * y[i]).sum::<f64>();
+                for i in k..7 {
+                    y[i] -= s * vk[i];
                 }
             }
         }
-        let d = det6(m);
-        c[skip] = if skip % 2 == 0 { d } else { -d };
     }
-    let w = c.norm();
-    let direction = if w > 0.0 { c / w } else { JointVector::zeros() };
-    Kernel {
-        direction,
-        manipulability: w,
+
+    /// det R = ± sqrt(det(J Jᵀ)).
+    fn det_r(&self) -> f64 {
+        (0..6).map(|k| self.r[k][k]).product()
+    }
+
+    /// Kernel of J, oriented as the generalized cross product of its rows.
+    pub fn kernel(&self) -> Kernel {
+        let mut q7 = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        self.apply_q(&mut q7);
+        let det = self.det_q * self.det_r();
+        let w = libm::fabs(det);
+        let direction = if w > 0.0 {
+            JointVector::from(q7) * (if det > 0.0 { 1.0 } else { -1.0 })
+        } else {
+            JointVector::zeros()
+        };
+        Kernel {
+            direction,
+            manipulability: w,
+        }
+    }
+
+    /// Minimum-norm solution J⁺V = Q [R⁻ᵀV; 0] of J q̇ = V; `None` if J is numerically rank
+    /// deficient (a diagonal entry of R below [`RANK_TOLERANCE`] × the largest one).
+    pub fn pinv_apply(&self, v: &Vector6<f64>) -> Option<JointVector> {
+        let scale = (0..6).map(|k| libm::fabs(self.r[k][k])).fold(0.0, f64::max);
+        let mut y = [0.0; 7];
+        for i in 0..6 {
+            let d = self.r[i][i];
+            if !(libm::fabs(d) > RANK_TOLERANCE * scale) {
+                return None;
+            }
+            let s: f64 = (0..i).map(|k| self.r[k][i] * y[k]).sum();
+            y[i] = (v[i] - s) / d;
+        }
+        self.apply_q(&mut y);
+        let out = JointVector::from(y);
+        out.iter().all(|x| x.is_finite()).then_some(out)
     }
 }
 
-/// Minimum-norm solution J⁺ V = Jᵀ (J Jᵀ)⁻¹ V of J q̇ = V; `None` if J J^T is not positive
-/// definite (rank-deficient J).
+/// Kernel of a 6×7 Jacobian (see the module documentation).
+pub fn kernel(j: &Jacobian) -> Kernel {
+    JacobianQr::new(j).kernel()
+}
+
+/// Minimum-norm solution J⁺V of J q̇ = V; `None` if J is numerically rank deficient.
 pub fn pinv_apply(j: &Jacobian, v: &Vector6<f64>) -> Option<JointVector> {
-    let jjt: Matrix6<f64> = j * j.transpose();
-    let chol = Cholesky::new(jjt)?;
-    Some(j.transpose() * chol.solve(v))
+    JacobianQr::new(j).pinv_apply(v)
 }

@@ -20,7 +20,7 @@ use crate::dmp::{
     DmpError, DmpParams, MIN_SAMPLES, Phase, PositionDmp, PositionState, RotationDmp, RotationState,
 };
 use crate::kinematics::ArmKinematics;
-use crate::nullspace::{kernel, pinv_apply};
+use crate::nullspace::{JacobianQr, kernel};
 use crate::robot::RobotModel;
 use crate::se3::{Pose, pose_error};
 use crate::{JointVector, NA};
@@ -271,8 +271,8 @@ impl RdmpRun {
             return Err(RdmpError::Finished);
         }
         let kin = ArmKinematics::new(model, &self.q);
-        let jac = kin.jacobian(model);
-        let ker = kernel(&jac);
+        let qr = JacobianQr::new(&kin.jacobian(model));
+        let ker = qr.kernel();
         if !(ker.manipulability >= cfg.min_manipulability) {
             return Err(RdmpError::Singular {
                 step: k,
@@ -308,7 +308,7 @@ impl RdmpRun {
         self.phase.advance();
         let twist = join(&(v + e_p * cfg.gain), &(w + e_r * cfg.gain));
         let gamma_rate = g[0] + cfg.gain * (gamma_dmp - self.gamma_measured);
-        let qd = pinv_apply(&jac, &twist).ok_or(RdmpError::Singular {
+        let qd = qr.pinv_apply(&twist).ok_or(RdmpError::Singular {
             step: k,
             manipulability: ker.manipulability,
         })? + ker.direction * gamma_rate;

@@ -34,6 +34,19 @@ fn kernel_agrees_with_svd_and_manipulability() {
         let i_min = svd.singular_values.imin();
         let v_ref = vt.row(i_min).transpose();
         let w_ref = (j * j.transpose()).determinant().max(0.0).sqrt();
+        // Orientation: the generalized cross product c_i = (−1)^i det(J without column i).
+        let cofactors = JointVector::from_fn(|i, _| {
+            let minor = SMatrix::<f64, 6, 6>::from_fn(|r, c| j[(r, if c < i { c } else { c + 1 })]);
+            if i % 2 == 0 {
+                minor.determinant()
+            } else {
+                -minor.determinant()
+            }
+        });
+        assert!(
+            (cofactors - k.direction * k.manipulability).norm() < 1e-9 * w_ref.max(1e-3),
+            "not the cross product"
+        );
         assert!(
             (k.manipulability - w_ref).abs() <= 1e-9 * w_ref.max(1e-3),
             "{} vs {w_ref}",

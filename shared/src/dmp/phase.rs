@@ -7,8 +7,9 @@
 
 use super::{DmpError, DmpParams, MAX_BASES};
 
-/// Bases whose exponent exceeds this contribute < 1e-26 relative: skipped (no `exp` call).
-const NEGLIGIBLE_EXPONENT: f64 = 60.0;
+/// Bases whose exponent exceeds this contribute e^{−36} ≈ 2e-16 of their peak, below f64
+/// resolution of the sum: skipped (no `exp` call).
+const NEGLIGIBLE_EXPONENT: f64 = 36.0;
 
 /// Centres and widths of the n_g Gaussian bases.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,11 +30,12 @@ pub struct Features {
 
 impl Basis {
     pub fn new(p: &DmpParams) -> Result<Self, DmpError> {
-        if !(2..=MAX_BASES).contains(&p.n_basis)
-            || !(p.alpha_zeta > 0.0 && p.alpha_zeta.is_finite())
-            || !(p.alpha_z > 0.0 && p.alpha_z.is_finite())
-            || !(p.beta_z > 0.0 && p.beta_z.is_finite())
-        {
+        let positive = |x: f64| x > 0.0 && x.is_finite();
+        let valid = (2..=MAX_BASES).contains(&p.n_basis)
+            && positive(p.alpha_zeta)
+            && positive(p.alpha_z)
+            && positive(p.beta_z);
+        if !valid {
             return Err(DmpError::BadParams);
         }
         let n = p.n_basis;

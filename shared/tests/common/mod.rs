@@ -8,10 +8,7 @@ pub fn deg(v: [f64; NA]) -> JointVector {
     JointVector::from(v.map(|x: f64| x.to_radians()))
 }
 
-/// Minimum-jerk blend s(u) = 10u³ − 15u⁴ + 6u⁵ on [0, 1].
-pub fn min_jerk(u: f64) -> f64 {
-    u * u * u * (10.0 - 15.0 * u + 6.0 * u * u)
-}
+pub use prf_shared::profile::min_jerk;
 
 /// A smooth joint-space demonstration from `a` to `b` with an elbow-swivel bump on joint 3
 /// (null-space motion) of `bump` rad, sampled every `dt` over `duration` seconds.

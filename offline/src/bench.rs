@@ -1,0 +1,178 @@
+//! `prf bench`: medians of the math core's hot paths, each with a baseline run in the same
+//! process where one exists (the paper's SVD formulation of Alg. 1/2).
+//!
+//! Each case times batches of calls with `Instant` and reports per-call figures over many
+//! batches: median, 10th and 90th percentile. Timing lives here, not in tests.
+
+use crate::synthetic;
+use anyhow::Result;
+use nalgebra::{SMatrix, Vector6};
+use prf_shared::dmp::DmpParams;
+use prf_shared::kinematics::ArmKinematics;
+use prf_shared::nullspace::{kernel, pinv_apply};
+use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpRun, integrate, null_space_coordinate};
+use prf_shared::robot::RobotModel;
+use prf_shared::{Jacobian, JointVector};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Measuring time per case, s.
+    #[arg(long, default_value_t = 1.0)]
+    seconds: f64,
+}
+
+/// Per-call statistics in nanoseconds.
+struct Stats {
+    median: f64,
+    p10: f64,
+    p90: f64,
+}
+
+/// Times `batch` calls of `f` per sample for about `seconds`; returns per-call statistics.
+fn measure(seconds: f64, batch: usize, mut f: impl FnMut()) -> Stats {
+    for _ in 0..batch {
+        f(); // warm-up
+    }
+    let budget = Duration::from_secs_f64(seconds);
+    let start = Instant::now();
+    let mut per_call = Vec::new();
+    while start.elapsed() < budget || per_call.len() < 20 {
+        let t = Instant::now();
+        for _ in 0..batch {
+            f();
+        }
+        per_call.push(t.elapsed().as_nanos() as f64 / batch as f64);
+    }
+    per_call.sort_by(f64::total_cmp);
+    let at = |q: f64| per_call[((per_call.len() - 1) as f64 * q).round() as usize];
+    Stats {
+        median: at(0.5),
+        p10: at(0.1),
+        p90: at(0.9),
+    }
+}
+
+fn report(name: &str, s: &Stats, unit: &str) {
+    let (k, u) = match unit {
+        "µs" => (1e-3, "µs"),
+        "ms" => (1e-6, "ms"),
+        _ => (1.0, "ns"),
+    };
+    println!(
+        "  {name:<44} median {:>9.3} {u}   p10 {:>9.3}   p90 {:>9.3}",
+        s.median * k,
+        s.p10 * k,
+        s.p90 * k
+    );
+}
+
+/// Baseline of Alg. 1/2 lines 6–10 as written: N = I − J⁺J, M = first column of U of SVD(N).
+fn kernel_svd(j: &Jacobian) -> JointVector {
+    let pinv = j.pseudo_inverse(1e-12).unwrap_or_else(|_| SMatrix::zeros());
+    let n = SMatrix::<f64, 7, 7>::identity() - pinv * j;
+    let svd = n.svd(true, false);
+    let u = svd.u.unwrap();
+    let i = svd.singular_values.imax();
+    u.column(i).into()
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let secs = args.seconds.max(0.05);
+    let model = RobotModel::kmr_iiwa14();
+    let cfg = RdmpConfig::default();
+    let configs: Vec<JointVector> = synthetic::reach(2.0, 0.01)
+        .into_iter()
+        .map(JointVector::from)
+        .collect();
+    let jacobians: Vec<Jacobian> = configs
+        .iter()
+        .map(|q| ArmKinematics::new(&model, q).jacobian(&model))
+        .collect();
+    println!(
+        "prf bench — {} s per case, per-call figures (build: {})",
+        secs,
+        if cfg!(debug_assertions) {
+            "debug, not representative"
+        } else {
+            "release"
+        }
+    );
+
+    println!("\nkinematics");
+    let mut i = 0;
+    let fk = measure(secs, 256, || {
+        i = (i + 1) % configs.len();
+        let k = ArmKinematics::new(&model, black_box(&configs[i]));
+        black_box(k.jacobian(&model));
+    });
+    report("FK (all frames + TCP) + Jacobian", &fk, "ns");
+
+    println!("\nnull-space basis M(q) (Sec. 4.2.1)");
+    let cof = measure(secs, 256, || {
+        i = (i + 1) % jacobians.len();
+        black_box(kernel(black_box(&jacobians[i])));
+    });
+    report("QR of Jᵀ → M(q), manipulability (ours)", &cof, "ns");
+    let svd = measure(secs, 64, || {
+        i = (i + 1) % jacobians.len();
+        black_box(kernel_svd(black_box(&jacobians[i])));
+    });
+    report("baseline: N = I − J⁺J, SVD(N) (Alg. 1/2)", &svd, "ns");
+    println!(
+        "  → {:.1}× faster than the SVD baseline",
+        svd.median / cof.median
+    );
+
+    println!("\npseudo-inverse solve J⁺V");
+    let v = Vector6::new(0.1, -0.2, 0.05, 0.3, 0.0, -0.1);
+    let qr = measure(secs, 256, || {
+        i = (i + 1) % jacobians.len();
+        black_box(pinv_apply(black_box(&jacobians[i]), &v));
+    });
+    report("QR of Jᵀ → J⁺V = Q[R⁻ᵀV; 0] (ours)", &qr, "ns");
+    let svdp = measure(secs, 64, || {
+        i = (i + 1) % jacobians.len();
+        black_box(jacobians[i].pseudo_inverse(1e-12).map(|p| p * v).ok());
+    });
+    report("baseline: SVD pseudo-inverse", &svdp, "ns");
+    println!("  → {:.1}× faster", svdp.median / qr.median);
+
+    println!("\nRDMP (Alg. 2), 2 s reach, Δt = 1 ms");
+    let demo = synthetic::reach(2.0, 0.01);
+    let mut gamma = vec![0.0; demo.len()];
+    null_space_coordinate(&model, &demo, cfg.min_manipulability, &mut gamma)
+        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let rdmp = Rdmp::train(&model, &demo, &gamma, 0.01, &DmpParams::default())
+        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let q0 = JointVector::from(demo[0]);
+    let goal = ArmKinematics::new(&model, &JointVector::from(*demo.last().unwrap())).tcp;
+    let fresh = || RdmpRun::new(&model, &rdmp, &q0, &goal, &cfg).expect("start");
+    let mut run = fresh();
+    let step = measure(secs, 100, || {
+        if run.finished() {
+            run = fresh();
+        }
+        black_box(run.step(&model, &rdmp, &cfg).expect("step"));
+    });
+    report(
+        "one RDMP step (FK, J, one QR → M and J⁺, 3 DMPs)",
+        &step,
+        "ns",
+    );
+    let whole = measure(secs, 1, || {
+        black_box(integrate(&model, &rdmp, &q0, &goal, &cfg, |_| {}).expect("integrate"));
+    });
+    report("whole integration, 2000 steps", &whole, "µs");
+    println!(
+        "  → {:.2}% of a 1 ms tick per step; goal ≤ 1 µs per step: {}",
+        step.median / 1e4,
+        if step.median <= 1000.0 {
+            "met"
+        } else {
+            "NOT met"
+        }
+    );
+    Ok(())
+}

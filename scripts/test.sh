@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# The project's test command (README, "Test"): installs what it needs, then runs every check
+# CI runs. Usage: scripts/test.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n==> %s\n' "$*"; }
+
+# Debian's Rust (rustc/cargo 1.96 with matching std sources) cross-builds the no_std crates for
+# the Cortex-M7 cell controller; rustup cannot add targets on these machines.
+APT_PACKAGES=(rustc-web cargo-web rust-web-src)
+missing=()
+for p in "${APT_PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  step "installing Debian packages: ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+
+step "cargo fmt --check"
+cargo fmt --all -- --check
+
+step "cargo clippy -D warnings"
+cargo clippy --workspace --all-targets --locked -q -- -D warnings
+
+step "no_std proof: prf-shared and prf-runtime for thumbv7em-none-eabihf (Cortex-M7)"
+# Debian's toolchain first in PATH for this command only; a separate target dir keeps its
+# artifacts apart from the rustup toolchain's.
+PATH="/usr/bin:$PATH" RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 /usr/bin/cargo build --locked -q \
+  -Zbuild-std=core -Zbuild-std-features=compiler-builtins-mem \
+  --target thumbv7em-none-eabihf -p prf-shared -p prf-runtime --release \
+  --target-dir target/thumbv7em
+echo "built: $(ls target/thumbv7em/thumbv7em-none-eabihf/release/*.rlib | xargs -n1 basename | tr '\n' ' ')"
+
+step "main job smoke run: prf demo"
+cargo run --locked -q -p prf-offline --bin prf -- demo >/tmp/prf-demo.$$ || { cat /tmp/prf-demo.$$; exit 1; }
+tail -n 3 /tmp/prf-demo.$$; rm -f /tmp/prf-demo.$$
+
+step "cargo test (workspace)"
+cargo test --workspace --locked
