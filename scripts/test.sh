@@ -40,4 +40,9 @@ cargo run --locked -q -p prf-offline --bin prf -- demo >/tmp/prf-demo.$$ || { ca
 tail -n 3 /tmp/prf-demo.$$; rm -f /tmp/prf-demo.$$
 
 step "cargo test (workspace)"
-cargo test --workspace --locked
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+cargo test --workspace --locked 2>&1 | tee "$log"
+# One closing line over all test binaries (cargo's last line is often a crate with 0 doc-tests).
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($i ~ /^passed/) p += $(i-1); if ($i ~ /^failed/) f += $(i-1) } }
+     END { printf "\nsummary: %d passed, %d failed\n", p, f; exit (f > 0 || p == 0) }' "$log"

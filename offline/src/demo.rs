@@ -138,6 +138,9 @@ pub fn run(args: &Args) -> Result<()> {
         }
         runs.push((dir, traj));
     }
+    println!(
+        "  (speeds follow the demonstration's timing; the jerk-limited output stage keeps the arm within its limits)"
+    );
     let far = Isometry3::from_parts(
         Translation3::from(demo_goal.translation.vector + Vector3::new(1.5, 0.0, 0.0)),
         demo_goal.rotation,
@@ -189,7 +192,8 @@ fn write_csv(path: &std::path::Path, rows: impl Iterator<Item = (f64, [f64; NA])
 }
 
 fn fmt_vec(v: &Vector3<f64>) -> String {
-    format!("[{:.3}, {:.3}, {:.3}]", v.x, v.y, v.z)
+    // + 0.0 turns −0.0 into 0.0 for printing.
+    format!("[{:.3}, {:.3}, {:.3}]", v.x + 0.0, v.y + 0.0, v.z + 0.0)
 }
 
 fn fmt_deg(q: &JointVector) -> String {

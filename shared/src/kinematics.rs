@@ -46,12 +46,13 @@ impl ArmKinematics {
     }
 
     /// Centres of the model's collision spheres in the arm base frame, written to `out`
-    /// (which must hold `model.spheres.len()` entries; extra entries are left untouched).
+    /// (which should hold `model.spheres.len()` entries; extra entries are left untouched).
+    /// A sphere on a frame that does not exist (see [`RobotModel::validate`]) is skipped.
     pub fn sphere_centres(&self, model: &RobotModel, out: &mut [Vector3<f64>]) {
         for (s, o) in model.spheres.iter().zip(out.iter_mut()) {
-            *o = self.frames[s.link as usize]
-                .transform_point(&s.centre.into())
-                .coords;
+            if let Some(frame) = self.frames.get(s.link as usize) {
+                *o = frame.transform_point(&s.centre.into()).coords;
+            }
         }
     }
 }
@@ -72,6 +73,33 @@ pub fn arm_base_pose(model: &RobotModel, q_m: [f64; 3]) -> Pose {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sphere_centres_follow_their_links() {
+        let model = RobotModel::kmr_iiwa14();
+        assert_eq!(model.validate(), Ok(()));
+        let q = JointVector::from(model.home);
+        let k = ArmKinematics::new(&model, &q);
+        let mut out = [Vector3::zeros(); crate::robot::MAX_SPHERES];
+        k.sphere_centres(&model, &mut out);
+        for (s, c) in model.spheres.iter().zip(&out) {
+            let local = k.frames[s.link as usize].inverse_transform_point(&(*c).into());
+            assert!((local.coords - s.centre).norm() < 1e-12);
+        }
+        let mut bad = model.clone();
+        bad.spheres[3].link = 42;
+        assert_eq!(
+            bad.validate(),
+            Err(crate::robot::ModelError::Sphere { index: 3 })
+        );
+        k.sphere_centres(&bad, &mut out); // no panic
+        let mut bad = model.clone();
+        bad.joints[2].upper = f64::NAN;
+        assert_eq!(
+            bad.validate(),
+            Err(crate::robot::ModelError::Joint { joint: 2 })
+        );
+    }
 
     #[test]
     fn zero_configuration_is_a_vertical_arm() {

@@ -86,6 +86,8 @@ pub enum RdmpError {
     },
     /// Buffers of different lengths were passed where equal lengths are needed.
     LengthMismatch,
+    /// [`RdmpConfig`] out of range (gain < 0, gain·Δt ≥ 1, NaN).
+    BadConfig,
     /// `step` was called after the last step.
     Finished,
 }
@@ -216,7 +218,10 @@ impl RdmpRun {
         goal: &Pose,
         cfg: &RdmpConfig,
     ) -> Result<Self, RdmpError> {
-        if q0.iter().any(|v| !v.is_finite()) || !(cfg.gain >= 0.0 && cfg.gain * cfg.dt < 1.0) {
+        if !(cfg.gain >= 0.0 && cfg.gain * cfg.dt < 1.0 && cfg.min_manipulability >= 0.0) {
+            return Err(RdmpError::BadConfig);
+        }
+        if q0.iter().any(|v| !v.is_finite()) {
             return Err(RdmpError::NonFinite { step: 0 });
         }
         let start = ArmKinematics::new(model, q0).tcp;

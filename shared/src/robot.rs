@@ -19,6 +19,19 @@ pub const LINK_TOOL: usize = NA + 1;
 /// Number of frames returned by forward kinematics: arm base, links 1..=7, tool (flange).
 pub const N_FRAMES: usize = NA + 2;
 
+/// What is wrong with a robot model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelError {
+    /// Non-finite origin or axis, lower ≥ upper, or a non-positive speed limit.
+    Joint { joint: usize },
+    /// Non-finite mount, flange or TCP transform.
+    Transform,
+    /// Sphere `index` names a frame that does not exist or has a bad centre or radius.
+    Sphere { index: usize },
+    /// The home configuration is outside the limits of `joint`.
+    Home { joint: usize },
+}
+
 /// One revolute joint: `T_i^{i−1} = origin · Rot(axis, q_i)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Joint {
@@ -149,6 +162,44 @@ impl RobotModel {
                 half_extents: Vector3::new(0.54, 0.315, 0.35),
             },
             home: home_deg.map(|d: f64| d.to_radians()),
+        }
+    }
+
+    /// Checks the data a URDF or blob may get wrong: finite transforms, ordered limits,
+    /// positive speeds, sphere frames that exist and positive finite radii.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let finite_pose = |p: &Pose| {
+            p.translation
+                .vector
+                .iter()
+                .chain(p.rotation.coords.iter())
+                .all(|v| v.is_finite())
+        };
+        for (i, j) in self.joints.iter().enumerate() {
+            let ok = finite_pose(&j.origin)
+                && j.axis.iter().all(|v| v.is_finite())
+                && j.lower < j.upper
+                && j.max_speed > 0.0
+                && j.max_speed.is_finite();
+            if !ok {
+                return Err(ModelError::Joint { joint: i });
+            }
+        }
+        if !(finite_pose(&self.mount) && finite_pose(&self.flange) && finite_pose(&self.tcp)) {
+            return Err(ModelError::Transform);
+        }
+        for (i, s) in self.spheres.iter().enumerate() {
+            let ok = (s.link as usize) < N_FRAMES
+                && s.centre.iter().all(|v| v.is_finite())
+                && s.radius > 0.0
+                && s.radius.is_finite();
+            if !ok {
+                return Err(ModelError::Sphere { index: i });
+            }
+        }
+        match self.limit_violation(&self.home) {
+            Some((joint, _)) => Err(ModelError::Home { joint }),
+            None => Ok(()),
         }
     }
 
