@@ -255,7 +255,7 @@ impl RdmpRun {
         Isometry3::from_parts(Translation3::from(self.position.y), self.rotation.r)
     }
 
-    /// Number of steps of the whole motion and the steps done so far.
+    /// (steps done, steps of the whole motion).
     pub fn progress(&self) -> (usize, usize) {
         (self.phase.step, self.phase.n_steps)
     }
@@ -284,35 +284,20 @@ impl RdmpRun {
                 manipulability: ker.manipulability,
             });
         }
+        // Work on copies and commit only on success: a refused step leaves the run unchanged.
+        let mut gamma_measured = self.gamma_measured;
         if let Some((m0, q0)) = self.previous {
-            self.gamma_measured += gamma_increment(&m0, &ker.direction, &q0, &self.q);
+            gamma_measured += gamma_increment(&m0, &ker.direction, &q0, &self.q);
         }
         let (e_p, e_r) = pose_error(&self.dmp_pose(), &kin.tcp);
-        let gamma_dmp = self.gamma.y[0];
-        let v = self.position.step(
-            &rdmp.position.params,
-            &rdmp.position.forcing,
-            rdmp.position.tau,
-            cfg.dt,
-            &self.phase,
-        );
-        let w = self.rotation.step(
-            &rdmp.rotation.params,
-            &rdmp.rotation.forcing,
-            rdmp.rotation.tau,
-            cfg.dt,
-            &self.phase,
-        );
-        let g = self.gamma.step(
-            &rdmp.gamma.params,
-            &rdmp.gamma.forcing,
-            rdmp.gamma.tau,
-            cfg.dt,
-            &self.phase,
-        );
-        self.phase.advance();
+        let (mut position, mut rotation, mut gamma) = (self.position, self.rotation, self.gamma);
+        let gamma_dmp = gamma.y[0];
+        let (pp, rp, gp) = (&rdmp.position, &rdmp.rotation, &rdmp.gamma);
+        let v = position.step(&pp.params, &pp.forcing, pp.tau, cfg.dt, &self.phase);
+        let w = rotation.step(&rp.params, &rp.forcing, rp.tau, cfg.dt, &self.phase);
+        let g = gamma.step(&gp.params, &gp.forcing, gp.tau, cfg.dt, &self.phase);
         let twist = join(&(v + e_p * cfg.gain), &(w + e_r * cfg.gain));
-        let gamma_rate = g[0] + cfg.gain * (gamma_dmp - self.gamma_measured);
+        let gamma_rate = g[0] + cfg.gain * (gamma_dmp - gamma_measured);
         let qd = qr.pinv_apply(&twist).ok_or(RdmpError::Singular {
             step: k,
             manipulability: ker.manipulability,
@@ -328,6 +313,11 @@ impl RdmpRun {
                 value,
             });
         }
+        self.position = position;
+        self.rotation = rotation;
+        self.gamma = gamma;
+        self.phase.advance();
+        self.gamma_measured = gamma_measured;
         self.previous = Some((ker.direction, self.q));
         self.q = q;
         Ok(RdmpStep {
@@ -335,7 +325,7 @@ impl RdmpRun {
             q,
             qd,
             gamma_dmp,
-            gamma_measured: self.gamma_measured,
+            gamma_measured,
             manipulability: ker.manipulability,
         })
     }

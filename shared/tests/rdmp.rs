@@ -170,6 +170,33 @@ fn goal_through_a_singularity_is_reported() {
 }
 
 #[test]
+fn refused_step_leaves_the_run_unchanged() {
+    // Joint 1 may move only 2° further than its start: the reach must hit that limit, and
+    // retrying must give the same refusal (no half-advanced DMP or γ state).
+    let mut f = fixture();
+    let q0 = JointVector::from(f.demo[0]);
+    let goal = tcp(&f.model, &JointVector::from(*f.demo.last().unwrap()));
+    f.model.joints[0].upper = q0[0] + 2f64.to_radians();
+    let mut run = RdmpRun::new(&f.model, &f.rdmp, &q0, &goal, &f.cfg).unwrap();
+    let err = loop {
+        match run.step(&f.model, &f.rdmp, &f.cfg) {
+            Ok(_) => assert!(!run.finished(), "limit never reached"),
+            Err(e) => break e,
+        }
+    };
+    assert!(
+        matches!(err, RdmpError::JointLimit { joint: 0, .. }),
+        "{err:?}"
+    );
+    let (q_before, pose_before, progress) = (*run.q(), run.dmp_pose(), run.progress());
+    assert_eq!(run.step(&f.model, &f.rdmp, &f.cfg).unwrap_err(), err);
+    assert_eq!(
+        (*run.q(), run.dmp_pose(), run.progress()),
+        (q_before, pose_before, progress)
+    );
+}
+
+#[test]
 fn bad_input_gives_typed_errors() {
     let f = fixture();
     let goal = tcp(&f.model, &JointVector::from(*f.demo.last().unwrap()));
