@@ -1,6 +1,6 @@
 //! `prf demo`: what the math core does, on the built-in robot, in one screen.
 
-use crate::synthetic;
+use crate::{plot, synthetic};
 use anyhow::{Context, Result};
 use nalgebra::{Isometry3, Translation3, Vector3};
 use prf_shared::dmp::DmpParams;
@@ -16,7 +16,8 @@ use std::path::PathBuf;
 #[derive(clap::Args, Default)]
 pub struct Args {
     /// Write the demonstration, its reproduction and every generalised trajectory as CSV
-    /// (t, a1..a7) into this directory.
+    /// (t, a1..a7) into this directory, with `elbow.svg`: the elbow's x over time for all of
+    /// them (the paper's Fig. 3iv).
     #[arg(long)]
     csv: Option<PathBuf>,
     /// Duration of the demonstrated reach, s.
@@ -162,7 +163,39 @@ pub fn run(args: &Args) -> Result<()> {
         for (i, (_, traj)) in runs.iter().enumerate() {
             write_csv(&dir.join(format!("goal{i}.csv")), steps(traj, cfg.dt, &q0))?;
         }
-        println!("trajectories written to {}", dir.display());
+        let elbow_x = |q: &[f64; NA]| {
+            ArmKinematics::new(&model, &JointVector::from(*q)).frames[4]
+                .translation
+                .x
+        };
+        let mut series = vec![plot::Series {
+            name: "demonstration".into(),
+            points: demo
+                .iter()
+                .enumerate()
+                .map(|(k, q)| (k as f64 * DEMO_DT, elbow_x(q)))
+                .collect(),
+            emphasis: true,
+        }];
+        for (dir, traj) in &runs {
+            series.push(plot::Series {
+                name: format!("goal {}", fmt_vec(&(dir * 0.1))),
+                points: steps(traj, cfg.dt, &q0)
+                    .step_by(10)
+                    .map(|(t, q)| (t, elbow_x(&q)))
+                    .collect(),
+                emphasis: false,
+            });
+        }
+        let svg = plot::line_plot(
+            "RDMP generalisation: elbow (link 4) x",
+            "t [s]",
+            "x [m], arm base frame",
+            &series,
+        );
+        let path = dir.join("elbow.svg");
+        std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
+        println!("trajectories and elbow.svg written to {}", dir.display());
     }
     Ok(())
 }

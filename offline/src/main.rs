@@ -2,6 +2,7 @@
 
 mod bench;
 mod demo;
+mod plot;
 mod synthetic;
 
 use clap::{Parser, Subcommand};
