@@ -174,5 +174,11 @@ pub fn run(args: &Args) -> Result<()> {
             "NOT met"
         }
     );
+    println!(
+        "\nstatic memory: trained RDMP {} B, RdmpRun (per-tick state) {} B, RobotModel {} B",
+        std::mem::size_of::<Rdmp>(),
+        std::mem::size_of::<RdmpRun>(),
+        std::mem::size_of::<RobotModel>()
+    );
     Ok(())
 }
