@@ -1,7 +1,9 @@
 //! `prf`: host tools of the PRF cell runtime.
 
 mod bench;
+mod check;
 mod demo;
+mod generate;
 mod plot;
 mod synthetic;
 
@@ -25,6 +27,12 @@ enum Command {
     /// Micro-benchmarks of the math core (medians, with the paper's SVD formulation as the
     /// baseline in the same process).
     Bench(bench::Args),
+    /// Generate the demonstration dataset of a cell (default: the built-in example cell, all
+    /// 64 afforded tasks) with the ground-truth motion planner.
+    Gen(generate::Args),
+    /// Validate a dataset directory (format, ids, time, limits); with `--world`, re-check every
+    /// program against the ground-truth cell.
+    CheckDataset(check::Args),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -32,5 +40,7 @@ fn main() -> anyhow::Result<()> {
         None => demo::run(&demo::Args::default()),
         Some(Command::Demo(args)) => demo::run(&args),
         Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Gen(args)) => generate::run(&args),
+        Some(Command::CheckDataset(args)) => check::run(&args),
     }
 }

@@ -150,7 +150,7 @@ impl RobotModel {
                 radius,
             });
         }
-        let home_deg = [0.0, -30.0, 0.0, 100.0, 0.0, -50.0, 0.0];
+        let home_deg = [0.0, -60.0, 0.0, -110.0, 0.0, 90.0, 0.0];
         RobotModel {
             mount: pose_from_xyz_rpy([0.33, 0.0, 0.70], [0.0; 3]),
             joints,

@@ -1,0 +1,502 @@
+//! The historical dataset D = {(q(t), T)} (Sec. 3.4): a directory with `manifest.json` and,
+//! per demonstration, a task file (JSON) and a trajectory (CSV). Documented in
+//! `docs/formats.md`. The reader validates everything and names the file, line and value at
+//! fault; the writer produces exactly what the reader accepts.
+
+use prf_shared::NA;
+use prf_shared::robot::RobotModel;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+pub const MANIFEST: &str = "manifest.json";
+pub const FORMAT: &str = "prf-dataset";
+pub const VERSION: u32 = 1;
+/// The trajectory CSV header.
+pub const CSV_HEADER: [&str; 4 + NA + 1] = [
+    "t", "base_x", "base_y", "base_yaw", "a1", "a2", "a3", "a4", "a5", "a6", "a7", "gripper",
+];
+/// Quaternions in task files must have unit norm within this tolerance.
+const QUATERNION_NORM_TOL: f64 = 1e-6;
+
+/// An id with its type (a part or location instance).
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Instance {
+    pub id: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+}
+
+/// One manifest entry: file names relative to the dataset directory.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Entry {
+    pub id: String,
+    pub task: String,
+    pub trajectory: String,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    pub format: String,
+    pub version: u32,
+    /// Robot the programs were recorded on (informative).
+    pub robot: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Nominal sample rate of the trajectories, Hz (informative; `t` is authoritative).
+    pub rate_hz: f64,
+    pub parts: Vec<Instance>,
+    pub locations: Vec<Instance>,
+    pub demonstrations: Vec<Entry>,
+}
+
+/// An object of a task with its pose [x, y, z, qw, qx, qy, qz] in the world.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Placed {
+    pub id: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub pose: [f64; 7],
+}
+
+/// The task T of a demonstration: part p at its initial pose, locations ℓ1, ℓ2, and the part's
+/// goal pose.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TaskRecord {
+    pub part: Placed,
+    pub from: Placed,
+    pub to: Placed,
+    /// Goal pose of the part, [x, y, z, qw, qx, qy, qz].
+    pub goal: [f64; 7],
+    /// Free text for people (e.g. how it was made); never read by learning.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+/// One row of a trajectory: time, base [x, y, yaw], arm joints, gripper (0 open, 1 closed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub t: f64,
+    pub base: [f64; 3],
+    pub arm: [f64; NA],
+    pub gripper: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Demonstration {
+    pub id: String,
+    pub task: TaskRecord,
+    pub samples: Vec<Sample>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dataset {
+    pub robot: String,
+    pub description: Option<String>,
+    pub rate_hz: f64,
+    pub parts: Vec<Instance>,
+    pub locations: Vec<Instance>,
+    pub demonstrations: Vec<Demonstration>,
+}
+
+/// What is wrong with a dataset.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ErrorKind {
+    MissingFile,
+    Io(String),
+    /// Malformed JSON or a missing/unknown field.
+    Json(String),
+    BadFormat(String),
+    Duplicate(String),
+    UnknownPart(String),
+    UnknownLocation(String),
+    /// The type given in a task disagrees with the manifest.
+    TypeMismatch {
+        id: String,
+        manifest: String,
+        task: String,
+    },
+    BadPose {
+        field: String,
+    },
+    BadHeader {
+        found: String,
+    },
+    ColumnCount {
+        expected: usize,
+        found: usize,
+    },
+    BadNumber {
+        column: String,
+        value: String,
+    },
+    NonFinite {
+        column: String,
+        value: String,
+    },
+    NonMonotonicTime {
+        previous: f64,
+        value: f64,
+    },
+    JointLimit {
+        joint: usize,
+        value: f64,
+        lower: f64,
+        upper: f64,
+    },
+    Gripper {
+        value: f64,
+    },
+    TooShort {
+        rows: usize,
+    },
+}
+
+/// An error with the file and (1-based) line at fault.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DatasetError {
+    pub file: PathBuf,
+    pub line: Option<usize>,
+    pub kind: ErrorKind,
+}
+
+impl fmt::Display for DatasetError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if let Some(l) = self.line {
+            write!(f, ":{l}")?;
+        }
+        write!(f, ": ")?;
+        match &self.kind {
+            ErrorKind::MissingFile => write!(f, "file is missing"),
+            ErrorKind::Io(e) => write!(f, "cannot read: {e}"),
+            ErrorKind::Json(e) => write!(f, "invalid JSON: {e}"),
+            ErrorKind::BadFormat(e) => write!(f, "{e}"),
+            ErrorKind::Duplicate(id) => write!(f, "duplicate id {id:?}"),
+            ErrorKind::UnknownPart(id) => write!(f, "unknown part id {id:?} (not in the manifest)"),
+            ErrorKind::UnknownLocation(id) => {
+                write!(f, "unknown location id {id:?} (not in the manifest)")
+            }
+            ErrorKind::TypeMismatch { id, manifest, task } => write!(
+                f,
+                "{id} has type {task:?} here but {manifest:?} in the manifest"
+            ),
+            ErrorKind::BadPose { field } => write!(
+                f,
+                "{field}: pose must be 7 finite numbers [x, y, z, qw, qx, qy, qz] with a unit quaternion"
+            ),
+            ErrorKind::BadHeader { found } => {
+                write!(f, "header {found:?}, expected {:?}", CSV_HEADER.join(","))
+            }
+            ErrorKind::ColumnCount { expected, found } => {
+                write!(f, "{found} columns, expected {expected}")
+            }
+            ErrorKind::BadNumber { column, value } => {
+                write!(f, "{column}: not a number: {value:?}")
+            }
+            ErrorKind::NonFinite { column, value } => {
+                write!(f, "{column}: non-finite value {value}")
+            }
+            ErrorKind::NonMonotonicTime { previous, value } => write!(
+                f,
+                "t = {value} does not increase (previous row t = {previous})"
+            ),
+            ErrorKind::JointLimit {
+                joint,
+                value,
+                lower,
+                upper,
+            } => write!(
+                f,
+                "a{joint} = {value:.6} rad ({:.3} deg) outside its limits [{lower:.6}, {upper:.6}] rad",
+                value.to_degrees()
+            ),
+            ErrorKind::Gripper { value } => {
+                write!(f, "gripper = {value}, expected 0 (open) .. 1 (closed)")
+            }
+            ErrorKind::TooShort { rows } => write!(f, "{rows} samples, need at least 2"),
+        }
+    }
+}
+
+impl std::error::Error for DatasetError {}
+
+fn err(file: &Path, line: Option<usize>, kind: ErrorKind) -> DatasetError {
+    DatasetError {
+        file: file.to_path_buf(),
+        line,
+        kind,
+    }
+}
+
+fn read_text(path: &Path) -> Result<String, DatasetError> {
+    std::fs::read_to_string(path).map_err(|e| {
+        let kind = if e.kind() == std::io::ErrorKind::NotFound {
+            ErrorKind::MissingFile
+        } else {
+            ErrorKind::Io(e.to_string())
+        };
+        err(path, None, kind)
+    })
+}
+
+fn parse_json<T: for<'de> Deserialize<'de>>(path: &Path, text: &str) -> Result<T, DatasetError> {
+    serde_json::from_str(text)
+        .map_err(|e| err(path, Some(e.line()), ErrorKind::Json(e.to_string())))
+}
+
+/// 1-based line of the first occurrence of `needle` (for semantic errors in JSON files).
+fn line_of(text: &str, needle: &str) -> Option<usize> {
+    text.find(needle)
+        .map(|i| text[..i].matches('\n').count() + 1)
+}
+
+fn valid_pose(p: &[f64; 7]) -> bool {
+    let qn = (p[3] * p[3] + p[4] * p[4] + p[5] * p[5] + p[6] * p[6]).sqrt();
+    p.iter().all(|v| v.is_finite()) && (qn - 1.0).abs() < QUATERNION_NORM_TOL
+}
+
+impl Dataset {
+    /// Reads and validates the dataset in `dir` against the robot's joint limits.
+    pub fn read(dir: &Path, model: &RobotModel) -> Result<Dataset, DatasetError> {
+        let mpath = dir.join(MANIFEST);
+        let mtext = read_text(&mpath)?;
+        let manifest: Manifest = parse_json(&mpath, &mtext)?;
+        if manifest.format != FORMAT || manifest.version != VERSION {
+            return Err(err(
+                &mpath,
+                line_of(&mtext, "\"format\""),
+                ErrorKind::BadFormat(format!(
+                    "format {:?} version {}, this build reads {FORMAT:?} version {VERSION}",
+                    manifest.format, manifest.version
+                )),
+            ));
+        }
+        let ids = manifest
+            .parts
+            .iter()
+            .map(|p| &p.id)
+            .chain(manifest.locations.iter().map(|l| &l.id))
+            .chain(manifest.demonstrations.iter().map(|d| &d.id));
+        let mut seen = std::collections::HashSet::new();
+        for id in ids {
+            if !seen.insert(id) {
+                let line = line_of(&mtext, &format!("\"{id}\""));
+                return Err(err(&mpath, line, ErrorKind::Duplicate(id.clone())));
+            }
+        }
+        let mut demonstrations = Vec::with_capacity(manifest.demonstrations.len());
+        for entry in &manifest.demonstrations {
+            let task = read_task(&dir.join(&entry.task), &manifest)?;
+            let samples = read_trajectory(&dir.join(&entry.trajectory), model)?;
+            demonstrations.push(Demonstration {
+                id: entry.id.clone(),
+                task,
+                samples,
+            });
+        }
+        Ok(Dataset {
+            robot: manifest.robot,
+            description: manifest.description,
+            rate_hz: manifest.rate_hz,
+            parts: manifest.parts,
+            locations: manifest.locations,
+            demonstrations,
+        })
+    }
+
+    /// Writes the dataset to `dir` (created if needed): `manifest.json`, and per
+    /// demonstration `<id>.task.json` and `<id>.csv`.
+    pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+        std::fs::create_dir_all(dir)?;
+        let mut entries = Vec::new();
+        for d in &self.demonstrations {
+            let task = format!("{}.task.json", d.id);
+            let trajectory = format!("{}.csv", d.id);
+            let json = serde_json::to_string_pretty(&d.task).map_err(std::io::Error::other)?;
+            std::fs::write(dir.join(&task), json + "\n")?;
+            std::fs::write(dir.join(&trajectory), trajectory_csv(&d.samples))?;
+            entries.push(Entry {
+                id: d.id.clone(),
+                task,
+                trajectory,
+            });
+        }
+        let manifest = Manifest {
+            format: FORMAT.into(),
+            version: VERSION,
+            robot: self.robot.clone(),
+            description: self.description.clone(),
+            rate_hz: self.rate_hz,
+            parts: self.parts.clone(),
+            locations: self.locations.clone(),
+            demonstrations: entries,
+        };
+        let json = serde_json::to_string_pretty(&manifest).map_err(std::io::Error::other)?;
+        std::fs::write(dir.join(MANIFEST), json + "\n")
+    }
+}
+
+fn read_task(path: &Path, manifest: &Manifest) -> Result<TaskRecord, DatasetError> {
+    let text = read_text(path)?;
+    let task: TaskRecord = parse_json(path, &text)?;
+    let check = |placed: &Placed, known: &[Instance], field: &str, part: bool| {
+        let line = line_of(&text, &format!("\"{}\"", placed.id));
+        let Some(m) = known.iter().find(|i| i.id == placed.id) else {
+            let kind = if part {
+                ErrorKind::UnknownPart(placed.id.clone())
+            } else {
+                ErrorKind::UnknownLocation(placed.id.clone())
+            };
+            return Err(err(path, line, kind));
+        };
+        if m.kind != placed.kind {
+            return Err(err(
+                path,
+                line,
+                ErrorKind::TypeMismatch {
+                    id: placed.id.clone(),
+                    manifest: m.kind.clone(),
+                    task: placed.kind.clone(),
+                },
+            ));
+        }
+        if !valid_pose(&placed.pose) {
+            let line = line_of(&text, &format!("\"{field}\""));
+            return Err(err(
+                path,
+                line,
+                ErrorKind::BadPose {
+                    field: format!("{field}.pose"),
+                },
+            ));
+        }
+        Ok(())
+    };
+    check(&task.part, &manifest.parts, "part", true)?;
+    check(&task.from, &manifest.locations, "from", false)?;
+    check(&task.to, &manifest.locations, "to", false)?;
+    if !valid_pose(&task.goal) {
+        let line = line_of(&text, "\"goal\"");
+        return Err(err(
+            path,
+            line,
+            ErrorKind::BadPose {
+                field: "goal".into(),
+            },
+        ));
+    }
+    Ok(task)
+}
+
+fn read_trajectory(path: &Path, model: &RobotModel) -> Result<Vec<Sample>, DatasetError> {
+    let text = read_text(path)?;
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+    let header = lines.next().map(|(_, l)| l).unwrap_or("");
+    let columns: Vec<&str> = header.split(',').map(str::trim).collect();
+    if columns != CSV_HEADER {
+        return Err(err(
+            path,
+            Some(1),
+            ErrorKind::BadHeader {
+                found: header.to_string(),
+            },
+        ));
+    }
+    let mut samples: Vec<Sample> = Vec::new();
+    for (line_no, line) in lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let at = |kind| err(path, Some(line_no), kind);
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if fields.len() != CSV_HEADER.len() {
+            return Err(at(ErrorKind::ColumnCount {
+                expected: CSV_HEADER.len(),
+                found: fields.len(),
+            }));
+        }
+        let mut v = [0.0; 12];
+        for (k, f) in fields.iter().enumerate() {
+            let column = CSV_HEADER[k].to_string();
+            let x: f64 = f.parse().map_err(|_| {
+                at(ErrorKind::BadNumber {
+                    column: column.clone(),
+                    value: f.to_string(),
+                })
+            })?;
+            if !x.is_finite() {
+                return Err(at(ErrorKind::NonFinite {
+                    column,
+                    value: f.to_string(),
+                }));
+            }
+            v[k] = x;
+        }
+        let s = Sample {
+            t: v[0],
+            base: [v[1], v[2], v[3]],
+            arm: std::array::from_fn(|j| v[4 + j]),
+            gripper: v[11],
+        };
+        if let Some(prev) = samples.last()
+            && !(s.t > prev.t)
+        {
+            return Err(at(ErrorKind::NonMonotonicTime {
+                previous: prev.t,
+                value: s.t,
+            }));
+        }
+        if let Some((joint, value)) = model.limit_violation(&s.arm) {
+            let j = &model.joints[joint];
+            return Err(at(ErrorKind::JointLimit {
+                joint: joint + 1,
+                value,
+                lower: j.lower,
+                upper: j.upper,
+            }));
+        }
+        if !(0.0..=1.0).contains(&s.gripper) {
+            return Err(at(ErrorKind::Gripper { value: s.gripper }));
+        }
+        samples.push(s);
+    }
+    if samples.len() < 2 {
+        return Err(err(
+            path,
+            None,
+            ErrorKind::TooShort {
+                rows: samples.len(),
+            },
+        ));
+    }
+    Ok(samples)
+}
+
+/// CSV text of a trajectory: time to 1 µs, positions to 1 nm and angles to 1 nrad (fine enough
+/// that second differences at 100 Hz resolve accelerations to 1e-4 m/s²).
+pub fn trajectory_csv(samples: &[Sample]) -> String {
+    use std::fmt::Write;
+    let mut out = CSV_HEADER.join(",");
+    out.push('\n');
+    for s in samples {
+        let _ = write!(
+            out,
+            "{:.6},{:.9},{:.9},{:.9}",
+            s.t, s.base[0], s.base[1], s.base[2]
+        );
+        for a in s.arm {
+            let _ = write!(out, ",{a:.9}");
+        }
+        let _ = writeln!(out, ",{}", s.gripper);
+    }
+    out
+}
