@@ -39,6 +39,12 @@ step "main job smoke run: prf demo"
 cargo run --locked -q -p prf-offline --bin prf -- demo >/tmp/prf-demo.$$ || { cat /tmp/prf-demo.$$; exit 1; }
 tail -n 3 /tmp/prf-demo.$$; rm -f /tmp/prf-demo.$$
 
+step "CLI smoke run: prf gen (4 demonstrations) + prf check-dataset against the ground truth"
+smoke=target/smoke-dataset
+rm -rf "$smoke"
+cargo run --locked -q -p prf-offline --bin prf -- gen --only 0-1,20,60 -o "$smoke" --quiet
+cargo run --locked -q -p prf-offline --bin prf -- check-dataset "$smoke" --world example | tail -n 2
+
 step "cargo test (workspace)"
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT

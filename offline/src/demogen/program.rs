@@ -12,6 +12,8 @@ use crate::validate::{self, MotionLimits, wrap_angle as wrap};
 use crate::world::geometry::{Cell, Obstacle};
 use crate::world::{AffordedTask, Planar, World};
 use nalgebra::{Isometry3, Translation3};
+use prf_shared::kinematics::ArmKinematics;
+use prf_shared::nullspace::kernel;
 use prf_shared::se3::{Pose, pose_to_array};
 use prf_shared::{JointVector, NA};
 use rand::{SeedableRng, rngs::StdRng};
@@ -36,6 +38,9 @@ pub struct GenConfig {
     /// Smallest step (bound on sphere motion) of the planner's edge check, m: an edge's
     /// clearance may dip at most this far below the planner's requirement between checks.
     pub edge_resolution: f64,
+    /// Smallest manipulability sqrt(det JJᵀ) of a planned configuration: programmers keep away
+    /// from singularities (Sec. 4.2.1), and RDMPs cannot be trained through them.
+    pub min_manipulability: f64,
     /// Re-sampling resolution of the final check, m.
     pub check_resolution: f64,
     pub limits: MotionLimits,
@@ -54,6 +59,7 @@ impl GenConfig {
             dwell: 0.2,
             planning_margin: 0.005,
             edge_resolution: 0.001,
+            min_manipulability: 0.03,
             check_resolution: 0.002,
             limits,
             ik: IkConfig::default(),
@@ -109,7 +115,12 @@ struct ArmSpace<'a> {
     self_clearance: f64,
     levers: [f64; NA],
     resolution: f64,
+    min_manipulability: f64,
 }
+
+/// Largest step of the edge check (bound on sphere motion), m: keeps the manipulability,
+/// which has no slack bound, sampled densely enough.
+const MAX_EDGE_STEP: f64 = 0.05;
 
 impl ArmSpace<'_> {
     /// How far every sphere centre may move before `q`'s clearance requirement can break;
@@ -118,9 +129,14 @@ impl ArmSpace<'_> {
         if self.cell.model.limit_violation(q).is_some() {
             return None;
         }
+        let model = &self.cell.model;
+        let kin = ArmKinematics::new(model, &JointVector::from(*q));
+        if kernel(&kin.jacobian(model)).manipulability < self.min_manipulability {
+            return None;
+        }
         let c = self.cell.arm_clearance(&self.base, q, &self.obstacles);
         let s = (c.world - self.world_clearance).min((c.self_ - self.self_clearance) / 2.0);
-        (s >= 0.0).then_some(s)
+        (s >= 0.0).then_some(s.min(MAX_EDGE_STEP))
     }
 
     /// Why `q` is not valid, for messages.
@@ -250,6 +266,7 @@ impl<'w> Generator<'w> {
             self_clearance: self.world.clearance.self_collision + self.cfg.planning_margin,
             levers: self.cell.motion_levers().0,
             resolution: self.cfg.edge_resolution,
+            min_manipulability: self.cfg.min_manipulability,
         }
     }
 

@@ -6,8 +6,10 @@ use rand::{RngExt, rngs::StdRng};
 /// Planner effort.
 #[derive(Clone, Copy, Debug)]
 pub struct RrtConfig {
-    /// Maximum tree extensions before giving up.
+    /// Maximum tree extensions of one attempt.
     pub max_iterations: usize,
+    /// Attempts with fresh trees before giving up (restarts escape an unlucky tree).
+    pub attempts: usize,
     /// Largest joint-space step of one extension, rad (Euclidean).
     pub step: f64,
     /// Random shortcut attempts on the found path.
@@ -17,7 +19,8 @@ pub struct RrtConfig {
 impl Default for RrtConfig {
     fn default() -> Self {
         RrtConfig {
-            max_iterations: 20_000,
+            max_iterations: 10_000,
+            attempts: 4,
             step: 0.25,
             shortcut_attempts: 200,
         }
@@ -152,6 +155,25 @@ pub fn plan<const N: usize>(
     if space.edge_valid(&start, &goal) {
         return Ok(vec![start, goal]);
     }
+    for _ in 0..cfg.attempts.max(1) {
+        if let Some(path) = connect_trees(space, start, goal, cfg, rng) {
+            let path = shortcut(space, path, cfg.shortcut_attempts, rng);
+            return Ok(prune(space, path));
+        }
+    }
+    Err(RrtError::NoPath {
+        iterations: cfg.max_iterations * cfg.attempts.max(1),
+    })
+}
+
+/// One RRT-Connect attempt: grows a tree from each end until they connect.
+fn connect_trees<const N: usize>(
+    space: &impl Space<N>,
+    start: [f64; N],
+    goal: [f64; N],
+    cfg: &RrtConfig,
+    rng: &mut StdRng,
+) -> Option<Vec<[f64; N]>> {
     let (lo, hi) = (space.lower(), space.upper());
     let mut a = Tree::new(start);
     let mut b = Tree::new(goal);
@@ -170,16 +192,13 @@ pub fn plan<const N: usize>(
                 path.reverse();
                 let tail = to_goal.path_to_root(to_goal_id);
                 path.extend(tail.into_iter().skip(1));
-                let path = shortcut(space, path, cfg.shortcut_attempts, rng);
-                return Ok(prune(space, path));
+                return Some(path);
             }
         }
         std::mem::swap(&mut a, &mut b);
         a_is_start = !a_is_start;
     }
-    Err(RrtError::NoPath {
-        iterations: cfg.max_iterations,
-    })
+    None
 }
 
 /// Random shortcutting: join two random points of the path by a straight edge when it is
