@@ -3,7 +3,10 @@
 use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use prf_offline::demogen::generate_dataset;
+use prf_offline::world::floorplan::floorplan_svg;
+use prf_offline::world::geometry::Cell;
 use prf_offline::world::{AffordedTask, World};
+use prf_shared::robot::RobotModel;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -115,6 +118,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     dataset
         .write(&args.output)
         .with_context(|| format!("{}: cannot write the dataset", args.output.display()))?;
+    let cell = Cell::new(&world, &RobotModel::kmr_iiwa14());
+    let plan = args.output.join("floorplan.svg");
+    std::fs::write(&plan, floorplan_svg(&world, &cell, &dataset.demonstrations))
+        .with_context(|| format!("{}: cannot write", plan.display()))?;
     if !args.quiet {
         let seconds: f64 = dataset
             .demonstrations
@@ -122,11 +129,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             .map(|d| d.samples.last().map_or(0.0, |s| s.t))
             .sum();
         println!(
-            "wrote {} demonstrations ({:.0} s of robot programs) to {} in {:.1} s",
+            "wrote {} demonstrations ({:.0} s of robot programs) to {} in {:.1} s; top view: {}",
             dataset.demonstrations.len(),
             seconds,
             args.output.display(),
-            start.elapsed().as_secs_f64()
+            start.elapsed().as_secs_f64(),
+            plan.display()
         );
     }
     Ok(())

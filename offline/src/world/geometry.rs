@@ -72,7 +72,8 @@ impl Obstacle {
         self.half.norm()
     }
 
-    fn footprint(&self) -> [Vector2<f64>; 4] {
+    /// Corners of the box's footprint on the floor (counter-clockwise).
+    pub fn footprint(&self) -> [Vector2<f64>; 4] {
         rectangle(self.centre.xy(), self.cos, self.sin, self.half.xy())
     }
 
@@ -330,7 +331,8 @@ impl Cell {
         self.obstacles_near(q_m)
     }
 
-    fn platform_footprint(&self, q_m: [f64; 3]) -> [Vector2<f64>; 4] {
+    /// Corners of the platform's footprint at q_m.
+    pub fn platform_footprint(&self, q_m: [f64; 3]) -> [Vector2<f64>; 4] {
         let p = &self.model.platform;
         let (s, c) = q_m[2].sin_cos();
         let centre = Vector2::new(q_m[0], q_m[1])

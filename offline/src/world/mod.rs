@@ -7,6 +7,7 @@
 //! see the true geometry. The format is documented in `docs/formats.md`; the built-in example
 //! is `offline/data/example-world.json`.
 
+pub mod floorplan;
 pub mod geometry;
 
 use anyhow::{Context, bail};
