@@ -3,6 +3,7 @@
 //! `docs/formats.md`. The reader validates everything and names the file, line and value at
 //! fault; the writer produces exactly what the reader accepts.
 
+use crate::line_of;
 use prf_shared::NA;
 use prf_shared::robot::RobotModel;
 use serde::{Deserialize, Serialize};
@@ -248,12 +249,6 @@ fn read_text(path: &Path) -> Result<String, DatasetError> {
 fn parse_json<T: for<'de> Deserialize<'de>>(path: &Path, text: &str) -> Result<T, DatasetError> {
     serde_json::from_str(text)
         .map_err(|e| err(path, Some(e.line()), ErrorKind::Json(e.to_string())))
-}
-
-/// 1-based line of the first occurrence of `needle` (for semantic errors in JSON files).
-fn line_of(text: &str, needle: &str) -> Option<usize> {
-    text.find(needle)
-        .map(|i| text[..i].matches('\n').count() + 1)
 }
 
 fn valid_pose(p: &[f64; 7]) -> bool {

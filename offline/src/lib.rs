@@ -5,3 +5,10 @@ pub mod dataset;
 pub mod demogen;
 pub mod validate;
 pub mod world;
+
+/// 1-based line of the first occurrence of `needle` in `text`: where a semantic error in a
+/// JSON file is reported.
+pub(crate) fn line_of(text: &str, needle: &str) -> Option<usize> {
+    text.find(needle)
+        .map(|i| text[..i].matches('\n').count() + 1)
+}

@@ -4,8 +4,8 @@
 mod common;
 
 use nalgebra::Vector3;
-use prf_offline::world::World;
 use prf_offline::world::geometry::{Cell, Contact, Obstacle, box_signed_distance};
+use prf_offline::world::{World, planar};
 use prf_shared::robot::RobotModel;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use std::path::Path;
@@ -182,8 +182,7 @@ fn platform_clearance_is_exact_at_the_stances() {
     for (i, loc) in w.locations.iter().enumerate() {
         for a in &w.location_type(i).approaches {
             let p = w.location_pose(i) * a.stance.pose();
-            let (_, _, yaw) = p.rotation.euler_angles();
-            let r = cell.clearance([p.translation.x, p.translation.y, yaw], &cell.model.home);
+            let r = cell.clearance(planar(&p), &cell.model.home);
             assert!(
                 (r.world - 0.06).abs() < 1e-9,
                 "{} {}: {} {:?}",

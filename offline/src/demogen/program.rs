@@ -10,7 +10,7 @@ use super::timing::{Limits, Motion};
 use crate::dataset::{Placed, Sample, TaskRecord};
 use crate::validate::{self, MotionLimits, wrap_angle as wrap};
 use crate::world::geometry::{Cell, Obstacle};
-use crate::world::{AffordedTask, Planar, World};
+use crate::world::{AffordedTask, Planar, World, planar};
 use nalgebra::{Isometry3, Translation3};
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::nullspace::kernel;
@@ -236,11 +236,6 @@ pub struct Generator<'w> {
     pub cfg: GenConfig,
 }
 
-fn planar_of(p: &Pose) -> [f64; 3] {
-    let (_, _, yaw) = p.rotation.euler_angles();
-    [p.translation.x, p.translation.y, yaw]
-}
-
 impl<'w> Generator<'w> {
     pub fn new(world: &'w World, model: &prf_shared::robot::RobotModel, cfg: GenConfig) -> Self {
         Generator {
@@ -261,7 +256,7 @@ impl<'w> Generator<'w> {
         ArmSpace {
             cell: &self.cell,
             base: prf_shared::kinematics::arm_base_pose(&self.cell.model, base),
-            obstacles: self.cell.arm_obstacles(base),
+            obstacles: self.cell.obstacles_near(base),
             world_clearance: self.world.clearance.demonstration + self.cfg.planning_margin,
             self_clearance: self.world.clearance.self_collision + self.cfg.planning_margin,
             levers: self.cell.motion_levers().0,
@@ -283,7 +278,7 @@ impl<'w> Generator<'w> {
         let model = &self.cell.model;
         let ltype = w.location_type(loc);
         let stance = ltype.approaches[approach].stance.pose();
-        let base = planar_of(&(w.location_pose(loc) * stance));
+        let base = planar(&(w.location_pose(loc) * stance));
         let name = format!(
             "{}.{}",
             w.locations[loc].id, ltype.approaches[approach].name
@@ -421,7 +416,7 @@ impl<'w> Generator<'w> {
         let pose = w.location_pose(loc);
         std::iter::once(&a.stance)
             .chain(&a.exit)
-            .map(|p: &Planar| planar_of(&(pose * p.pose())))
+            .map(|p: &Planar| planar(&(pose * p.pose())))
             .collect()
     }
 

@@ -1,8 +1,8 @@
 //! Top view of a cell as SVG: obstacle footprints, stances, and the platform and TCP paths of
 //! a dataset's programs — where a picture beats a table.
 
-use super::World;
 use super::geometry::Cell;
+use super::{World, planar};
 use crate::dataset::Demonstration;
 use prf_shared::JointVector;
 use prf_shared::kinematics::{ArmKinematics, arm_base_pose};
@@ -19,10 +19,9 @@ pub fn floorplan_svg(world: &World, cell: &Cell, demos: &[Demonstration]) -> Str
     for (i, loc) in world.locations.iter().enumerate() {
         for a in &world.location_type(i).approaches {
             let p = world.location_pose(i) * a.stance.pose();
-            let (_, _, yaw) = p.rotation.euler_angles();
             stances.push((
                 format!("{}.{}", loc.id, a.name),
-                cell.platform_footprint([p.translation.x, p.translation.y, yaw]),
+                cell.platform_footprint(planar(&p)),
             ));
         }
     }

@@ -67,7 +67,7 @@ impl Obstacle {
         box_signed_distance(&self.to_local(p), &self.half)
     }
 
-    /// Distance from the box to the box centre `c`, an upper bound for culling.
+    /// Radius of the sphere about the centre that contains the box (for culling).
     fn bounding_radius(&self) -> f64 {
         self.half.norm()
     }
@@ -244,7 +244,7 @@ impl Cell {
             let dz = (oz0 - pz1).max(pz0 - oz1).max(0.0);
             let dxy = polygon_distance(&platform, &o.footprint());
             let d = if dz == 0.0 && dxy == 0.0 {
-                // Overlapping prisms: report penetration as a negative distance of size 0+.
+                // Overlapping prisms: a penetration (its depth is not computed).
                 -f64::MIN_POSITIVE
             } else {
                 dxy.hypot(dz)
@@ -259,8 +259,8 @@ impl Cell {
         r
     }
 
-    /// Obstacles that can be within reach of the arm at base pose q_m.
-    fn obstacles_near(&self, q_m: [f64; 3]) -> Vec<&Obstacle> {
+    /// Obstacles that can be within reach of the arm when the platform stands at q_m.
+    pub fn obstacles_near(&self, q_m: [f64; 3]) -> Vec<&Obstacle> {
         let base = arm_base_pose(&self.model, q_m).translation.vector;
         self.obstacles
             .iter()
@@ -324,11 +324,6 @@ impl Cell {
             }
         }
         r
-    }
-
-    /// Obstacles within reach of the arm when the platform stands at q_m.
-    pub fn arm_obstacles(&self, q_m: [f64; 3]) -> Vec<&Obstacle> {
-        self.obstacles_near(q_m)
     }
 
     /// Corners of the platform's footprint at q_m.

@@ -10,6 +10,7 @@
 pub mod floorplan;
 pub mod geometry;
 
+use crate::line_of;
 use anyhow::{Context, bail};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use prf_shared::se3::{Pose, pose_from_xyz_rpy};
@@ -72,6 +73,12 @@ pub struct Planar {
     pub x: f64,
     pub y: f64,
     pub yaw_deg: f64,
+}
+
+/// [x, y, yaw (rad)] of a pose on the floor (its rotation taken about z).
+pub fn planar(p: &Pose) -> [f64; 3] {
+    let (_, _, yaw) = p.rotation.euler_angles();
+    [p.translation.x, p.translation.y, yaw]
 }
 
 impl Planar {
@@ -213,7 +220,13 @@ impl World {
     }
 
     fn validate(&self, text: &str) -> anyhow::Result<()> {
-        let at = |needle: &str| format!("{}:{}", self.source.display(), line_of(text, needle));
+        let at = |needle: &str| {
+            format!(
+                "{}:{}",
+                self.source.display(),
+                line_of(text, needle).unwrap_or(1)
+            )
+        };
         if self.format != FORMAT {
             bail!(
                 "{}: format {:?}, expected {FORMAT:?}",
@@ -430,13 +443,6 @@ impl World {
             self.part_type(t.part).grasps[a.grasp].name,
         )
     }
-}
-
-/// 1-based line of the first occurrence of `needle` in `text` (1 if absent).
-fn line_of(text: &str, needle: &str) -> usize {
-    text.find(needle)
-        .map(|i| text[..i].matches('\n').count() + 1)
-        .unwrap_or(1)
 }
 
 fn finite(values: &[f64], at: impl Fn() -> String) -> anyhow::Result<()> {
