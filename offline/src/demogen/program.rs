@@ -123,51 +123,49 @@ struct ArmSpace<'a> {
 const MAX_EDGE_STEP: f64 = 0.05;
 
 impl ArmSpace<'_> {
-    /// How far every sphere centre may move before `q`'s clearance requirement can break;
-    /// `None` if `q` is invalid.
-    fn slack(&self, q: &[f64; NA]) -> Option<f64> {
-        if self.cell.model.limit_violation(q).is_some() {
-            return None;
-        }
+    /// The planner's one validity test: within limits, manipulability ≥ the floor, clearance
+    /// ≥ r_d + margin and self clearance ≥ its minimum. Returns the slack (how far every
+    /// sphere centre may move before the requirement can break), or why `q` is invalid.
+    fn check(&self, q: &[f64; NA]) -> Result<f64, String> {
         let model = &self.cell.model;
-        let kin = ArmKinematics::new(model, &JointVector::from(*q));
-        if kernel(&kin.jacobian(model)).manipulability < self.min_manipulability {
-            return None;
-        }
-        let c = self.cell.arm_clearance(&self.base, q, &self.obstacles);
-        let s = (c.world - self.world_clearance).min((c.self_ - self.self_clearance) / 2.0);
-        (s >= 0.0).then_some(s.min(MAX_EDGE_STEP))
-    }
-
-    /// Why `q` is not valid, for messages.
-    fn explain(&self, q: &[f64; NA]) -> Result<(), String> {
-        if let Some((j, v)) = self.cell.model.limit_violation(q) {
+        let at = || format!("at q = {:.1?} deg", q.map(f64::to_degrees));
+        if let Some((j, v)) = model.limit_violation(q) {
             return Err(format!(
                 "a{} = {:.1} deg beyond its limit",
                 j + 1,
                 v.to_degrees()
             ));
         }
-        let c = self.cell.arm_clearance(&self.base, q, &self.obstacles);
+        let kin = ArmKinematics::new(model, &JointVector::from(*q));
+        let w = kernel(&kin.jacobian(model)).manipulability;
+        if w < self.min_manipulability {
+            return Err(format!(
+                "near a singularity: manipulability {w:.4} {}",
+                at()
+            ));
+        }
+        let c = self.cell.arm_clearance(&self.base, &kin, &self.obstacles);
         if c.world < self.world_clearance {
             return Err(format!(
-                "clearance {:.1} mm < {:.1} mm to {:?} at q = {:.1?} deg",
+                "clearance {:.1} mm < {:.1} mm to {:?} {}",
                 c.world * 1e3,
                 self.world_clearance * 1e3,
                 c.world_contact,
-                q.map(f64::to_degrees)
+                at()
             ));
         }
         if c.self_ < self.self_clearance {
             return Err(format!(
-                "self clearance {:.1} mm < {:.1} mm: {:?} at q = {:.1?} deg",
+                "self clearance {:.1} mm < {:.1} mm: {:?} {}",
                 c.self_ * 1e3,
                 self.self_clearance * 1e3,
                 c.self_contact,
-                q.map(f64::to_degrees)
+                at()
             ));
         }
-        Ok(())
+        Ok((c.world - self.world_clearance)
+            .min((c.self_ - self.self_clearance) / 2.0)
+            .min(MAX_EDGE_STEP))
     }
 }
 
@@ -181,7 +179,7 @@ impl Space<NA> for ArmSpace<'_> {
     }
 
     fn valid(&self, q: &[f64; NA]) -> bool {
-        self.slack(q).is_some()
+        self.check(q).is_ok()
     }
 
     /// Conservative advancement: at a configuration with clearance slack s (the smaller of
@@ -193,13 +191,10 @@ impl Space<NA> for ArmSpace<'_> {
         let mut u: f64 = 0.0;
         loop {
             let q: [f64; NA] = std::array::from_fn(|j| a[j] + (b[j] - a[j]) * u);
-            let Some(slack) = self.slack(&q) else {
+            let Ok(slack) = self.check(&q) else {
                 return false;
             };
-            if u >= 1.0 {
-                return true;
-            }
-            if total <= 0.0 {
+            if u >= 1.0 || total <= 0.0 {
                 return true;
             }
             u = (u + slack.max(self.resolution) / total).min(1.0);
@@ -300,11 +295,11 @@ impl<'w> Generator<'w> {
             error,
         };
         let q_grasp = ik::solve(model, &tcp_grasp, &home, &self.cfg.ik, |q| {
-            space.explain(&(*q).into())
+            space.check(&(*q).into()).map(|_| ())
         })
         .map_err(|e| ik_err("grasp", e))?;
         let q_pre = ik::solve(model, &tcp_pre, &q_grasp, &self.cfg.ik, |q| {
-            space.explain(&(*q).into())?;
+            space.check(&(*q).into())?;
             if space.edge_valid(&(*q).into(), &q_grasp.into()) {
                 Ok(())
             } else {
@@ -328,10 +323,17 @@ impl<'w> Generator<'w> {
         // Blended PTP path, or exact stops at the via points if the blends cut a corner too
         // close to an obstacle.
         let limits = self.arm_limits(self.cfg.arm_speed);
+        let arm_ok = |m: &Motion<NA>| {
+            self.piece_ok(Piece::Arm {
+                base,
+                motion: m.clone(),
+                reversed: false,
+            })
+        };
         let mut ptp = Motion::new(&path, &limits, true);
-        if !self.arm_motion_ok(base, &ptp) {
+        if !arm_ok(&ptp) {
             ptp = Motion::new(&path, &limits, false);
-            if !self.arm_motion_ok(base, &ptp) {
+            if !arm_ok(&ptp) {
                 return Err(GenError::Check {
                     what: name,
                     detail: "PTP path".into(),
@@ -345,15 +347,9 @@ impl<'w> Generator<'w> {
         })
     }
 
-    fn arm_motion_ok(&self, base: [f64; 3], m: &Motion<NA>) -> bool {
-        let samples = self.sample(
-            &[Piece::Arm {
-                base,
-                motion: m.clone(),
-                reversed: false,
-            }],
-            0.0,
-        );
+    /// Does one timed piece, sampled as it will be written, pass the final check?
+    fn piece_ok(&self, piece: Piece) -> bool {
+        let samples = self.sample(&[piece], 0.0);
         self.check(&samples).ok(
             self.world.clearance.demonstration,
             self.world.clearance.self_collision,
@@ -388,14 +384,7 @@ impl<'w> Generator<'w> {
             acceleration: self.cfg.limits.base_acceleration,
         };
         let blended = Motion::new(&w, &limits, true);
-        let ok = |m: &Motion<3>| {
-            let s = self.sample(&[Piece::Base(m.clone())], 0.0);
-            self.check(&s).ok(
-                self.world.clearance.demonstration,
-                self.world.clearance.self_collision,
-                validate::LIMIT_TOLERANCE,
-            )
-        };
+        let ok = |m: &Motion<3>| self.piece_ok(Piece::Base(m.clone()));
         if ok(&blended) {
             return Ok(blended);
         }

@@ -236,7 +236,8 @@ impl Cell {
     /// Clearances of the full configuration (base q_m = [x, y, yaw], arm q_a).
     pub fn clearance(&self, q_m: [f64; 3], q_a: &[f64; NA]) -> ClearanceReport {
         let base = arm_base_pose(&self.model, q_m);
-        let mut r = self.arm_clearance(&base, q_a, &self.obstacles_near(q_m));
+        let kin = ArmKinematics::new(&self.model, &JointVector::from(*q_a));
+        let mut r = self.arm_clearance(&base, &kin, &self.obstacles_near(q_m));
         let platform = self.platform_footprint(q_m);
         let (pz0, pz1) = platform_z(&self.model);
         for o in &self.obstacles {
@@ -273,11 +274,10 @@ impl Cell {
     pub fn arm_clearance(
         &self,
         base: &Pose,
-        q_a: &[f64; NA],
+        kin: &ArmKinematics,
         obstacles: &[&Obstacle],
     ) -> ClearanceReport {
         let model = &self.model;
-        let kin = ArmKinematics::new(model, &JointVector::from(*q_a));
         let mut local = [Vector3::zeros(); prf_shared::robot::MAX_SPHERES];
         kin.sphere_centres(model, &mut local);
         let n = model.spheres.len();
