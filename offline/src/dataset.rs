@@ -79,14 +79,8 @@ pub struct TaskRecord {
     pub note: Option<String>,
 }
 
-/// One row of a trajectory: time, base [x, y, yaw], arm joints, gripper (0 open, 1 closed).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sample {
-    pub t: f64,
-    pub base: [f64; 3],
-    pub arm: [f64; NA],
-    pub gripper: f64,
-}
+/// One row of a trajectory (the shared program sample).
+pub use prf_shared::motion::Sample;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Demonstration {

@@ -1,8 +1,11 @@
 //! Host-side library of the PRF cell runtime: the ground-truth world and demonstration
 //! generator, the dataset format, validation, and the tools behind the `prf` binary.
 
+pub mod compile;
 pub mod dataset;
 pub mod demogen;
+pub mod learn;
+pub mod robot_file;
 pub mod validate;
 pub mod world;
 

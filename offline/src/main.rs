@@ -4,6 +4,7 @@ mod bench;
 mod check;
 mod demo;
 mod generate;
+mod learn_cmd;
 mod plot;
 mod synthetic;
 
@@ -33,6 +34,10 @@ enum Command {
     /// Validate a dataset directory (format, ids, time, limits); with `--world`, re-check every
     /// program against the ground-truth cell.
     CheckDataset(check::Args),
+    /// Learn affordances, workspaces and skills from a dataset (Alg. 3) and compile the blob.
+    Learn(learn_cmd::Args),
+    /// Validate a blob and print its contents and size by section.
+    Inspect(learn_cmd::InspectArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -42,5 +47,7 @@ fn main() -> anyhow::Result<()> {
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Gen(args)) => generate::run(&args),
         Some(Command::CheckDataset(args)) => check::run(&args),
+        Some(Command::Learn(args)) => learn_cmd::run(&args),
+        Some(Command::Inspect(args)) => learn_cmd::inspect(&args),
     }
 }

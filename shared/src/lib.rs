@@ -9,6 +9,9 @@
 //! - [`nullspace`]: the sign-continuous compact null-space basis M(q) of Sec. 4.2.1;
 //! - [`dmp`]: DMPs of Sec. 3.2 (position in R^n, rotation on SO(3));
 //! - [`rdmp`]: redundancy DMPs, Alg. 1 (train) and Alg. 2 (integrate, one step per tick);
+//! - [`motion`]: the motion classes Pick, Place, Move (Sec. 5.1, 5.3);
+//! - [`field`], [`risk`]: the learned workspace as a conservative distance field and the
+//!   risk of Eq. 16;
 //! - [`profile`], [`linalg`]: small helpers (time scaling, fixed-size solvers).
 //!
 //! Section, equation and algorithm numbers refer to Toner, Tilbury, Barton, "PRF: A Program
@@ -16,12 +19,16 @@
 //! Robotics 2024, 13(8):118.
 #![no_std]
 
+pub mod blob;
 pub mod dmp;
+pub mod field;
 pub mod kinematics;
 pub mod linalg;
+pub mod motion;
 pub mod nullspace;
 pub mod profile;
 pub mod rdmp;
+pub mod risk;
 pub mod robot;
 pub mod se3;
 

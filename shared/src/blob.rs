@@ -1,0 +1,615 @@
+//! The compiled knowledge base ("blob"): header + postcard payload, read in place.
+//!
+//! Header (24 bytes, little endian): magic `PRFBLOB\0`, format version u32, payload length
+//! u32, CRC-32 (IEEE) of the payload u32, reserved u32 (0). The payload is one postcard
+//! [`Payload`]; its lists are [`Table`]s of individually encoded records with an offset
+//! index, and large arrays (field nodes, RDMP weights, poses) are borrowed byte slices, so
+//! a blob in flash is used where it lies: only the record being read is decoded.
+
+use crate::NA;
+use crate::dmp::{DmpParams, Forcing, MAX_BASES, PositionDmp, RotationDmp};
+use crate::field::{Field, FieldData, FieldError};
+use crate::motion::ActionTemplate;
+use crate::rdmp::Rdmp;
+use crate::robot::{Joint, MAX_SPHERES, ModelError, PlatformBox, RobotModel, Sphere};
+use crate::se3::{Pose, pose_from_array};
+use nalgebra::{Unit, Vector3};
+use serde::{Deserialize, Serialize};
+
+pub const MAGIC: [u8; 8] = *b"PRFBLOB\0";
+/// Format version this build reads and writes.
+pub const VERSION: u32 = 1;
+pub const HEADER_LEN: usize = 24;
+/// Maximum affordances (stances of a location type, grasps of a part type).
+pub const MAX_AFFORDANCES: usize = 16;
+/// DMP coordinates of an RDMP: position 3, rotation 3, γ 1.
+pub const RDMP_COORDS: usize = 7;
+
+/// Why a blob was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlobError {
+    /// Fewer bytes than the header, or than the header says.
+    Truncated {
+        needed: usize,
+        got: usize,
+    },
+    BadMagic,
+    /// Written by a newer (or unknown) format version.
+    Version {
+        found: u32,
+        supported: u32,
+    },
+    /// More bytes than the header says.
+    TrailingBytes {
+        declared: usize,
+        got: usize,
+    },
+    /// The payload's CRC-32 differs from the header's.
+    Checksum {
+        expected: u32,
+        found: u32,
+    },
+    /// The payload or a record does not decode.
+    Decode {
+        section: Section,
+        index: usize,
+    },
+    /// The robot model is invalid.
+    Model(ModelError),
+    /// A workspace field is malformed.
+    Field {
+        location_type: usize,
+        error: FieldError,
+    },
+    /// A skill names a class, RDMP, location or part type that does not exist, or an
+    /// affordance pose is not a unit-quaternion pose.
+    Reference {
+        section: Section,
+        index: usize,
+    },
+}
+
+/// Sections of the payload, for error reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Section {
+    Payload,
+    Classes,
+    LocationTypes,
+    PartTypes,
+    Rdmps,
+    Skills,
+}
+
+/// CRC-32 (IEEE 802.3, reflected, init and final xor 0xFFFFFFFF).
+pub fn crc32(data: &[u8]) -> u32 {
+    const TABLE: [u32; 256] = {
+        let mut t = [0u32; 256];
+        let mut i = 0;
+        while i < 256 {
+            let mut c = i as u32;
+            let mut k = 0;
+            while k < 8 {
+                c = if c & 1 != 0 {
+                    0xEDB8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
+                k += 1;
+            }
+            t[i] = c;
+            i += 1;
+        }
+        t
+    };
+    let mut c = 0xFFFF_FFFFu32;
+    for &b in data {
+        c = TABLE[((c ^ b as u32) & 0xFF) as usize] ^ (c >> 8);
+    }
+    !c
+}
+
+/// The header for a payload.
+pub fn header(payload: &[u8]) -> [u8; HEADER_LEN] {
+    let mut h = [0u8; HEADER_LEN];
+    h[..8].copy_from_slice(&MAGIC);
+    h[8..12].copy_from_slice(&VERSION.to_le_bytes());
+    h[12..16].copy_from_slice(&(payload.len() as u32).to_le_bytes());
+    h[16..20].copy_from_slice(&crc32(payload).to_le_bytes());
+    h
+}
+
+/// A list of postcard records: `offsets` holds one u32 (LE) start per record into `data`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Table<'a> {
+    #[serde(borrow)]
+    pub offsets: &'a [u8],
+    #[serde(borrow)]
+    pub data: &'a [u8],
+}
+
+impl<'a> Table<'a> {
+    pub fn len(&self) -> usize {
+        self.offsets.len() / 4
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn range(&self, i: usize) -> Option<(usize, usize)> {
+        let at = |k: usize| {
+            let o = self.offsets.get(4 * k..4 * k + 4)?;
+            Some(u32::from_le_bytes([o[0], o[1], o[2], o[3]]) as usize)
+        };
+        let start = at(i)?;
+        let end = if i + 1 < self.len() {
+            at(i + 1)?
+        } else {
+            self.data.len()
+        };
+        (start <= end && end <= self.data.len()).then_some((start, end))
+    }
+
+    /// Decodes record `i`.
+    pub fn get<T: Deserialize<'a>>(&self, i: usize, section: Section) -> Result<T, BlobError> {
+        let err = BlobError::Decode { section, index: i };
+        let (s, e) = self.range(i).ok_or(err)?;
+        postcard::from_bytes(&self.data[s..e]).map_err(|_| err)
+    }
+}
+
+/// A revolute joint: origin pose [x, y, z, qw, qx, qy, qz], axis, limits (rad, rad/s).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointData {
+    pub origin: [f64; 7],
+    pub axis: [f64; 3],
+    pub lower: f64,
+    pub upper: f64,
+    pub max_speed: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SphereData {
+    pub link: u8,
+    pub centre: [f64; 3],
+    pub radius: f64,
+}
+
+/// The robot model as compiled from URDF + sphere file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RobotData {
+    pub mount: [f64; 7],
+    pub joints: [JointData; NA],
+    pub flange: [f64; 7],
+    pub tcp: [f64; 7],
+    pub spheres: heapless::Vec<SphereData, MAX_SPHERES>,
+    pub platform_centre: [f64; 3],
+    pub platform_half: [f64; 3],
+    pub home: [f64; NA],
+}
+
+impl RobotData {
+    pub fn from_model(m: &RobotModel) -> Self {
+        use crate::se3::pose_to_array as arr;
+        RobotData {
+            mount: arr(&m.mount),
+            joints: m.joints.map(|j| JointData {
+                origin: arr(&j.origin),
+                axis: j.axis.into_inner().into(),
+                lower: j.lower,
+                upper: j.upper,
+                max_speed: j.max_speed,
+            }),
+            flange: arr(&m.flange),
+            tcp: arr(&m.tcp),
+            spheres: m
+                .spheres
+                .iter()
+                .map(|s| SphereData {
+                    link: s.link,
+                    centre: s.centre.into(),
+                    radius: s.radius,
+                })
+                .collect(),
+            platform_centre: m.platform.centre.into(),
+            platform_half: m.platform.half_extents.into(),
+            home: m.home,
+        }
+    }
+
+    /// The model, validated.
+    pub fn to_model(&self) -> Result<RobotModel, BlobError> {
+        let pose = |a: [f64; 7]| pose_from_array(a).ok_or(BlobError::Model(ModelError::Transform));
+        let mut joints = [Joint {
+            origin: Pose::identity(),
+            axis: Vector3::z_axis(),
+            lower: 0.0,
+            upper: 0.0,
+            max_speed: 0.0,
+        }; NA];
+        for (i, (j, d)) in joints.iter_mut().zip(&self.joints).enumerate() {
+            let bad = BlobError::Model(ModelError::Joint { joint: i });
+            let axis = Vector3::from(d.axis);
+            if !(axis.norm() > 0.5 && axis.iter().all(|v| v.is_finite())) {
+                return Err(bad);
+            }
+            *j = Joint {
+                origin: pose_from_array(d.origin).ok_or(bad)?,
+                axis: Unit::new_normalize(axis),
+                lower: d.lower,
+                upper: d.upper,
+                max_speed: d.max_speed,
+            };
+        }
+        let m = RobotModel {
+            mount: pose(self.mount)?,
+            joints,
+            flange: pose(self.flange)?,
+            tcp: pose(self.tcp)?,
+            spheres: self
+                .spheres
+                .iter()
+                .map(|s| Sphere {
+                    link: s.link,
+                    centre: Vector3::from(s.centre),
+                    radius: s.radius,
+                })
+                .collect(),
+            platform: PlatformBox {
+                centre: Vector3::from(self.platform_centre),
+                half_extents: Vector3::from(self.platform_half),
+            },
+            home: self.home,
+        };
+        m.validate().map_err(BlobError::Model)?;
+        Ok(m)
+    }
+}
+
+/// A motion class as stored: its name (the code's [`crate::motion::CLASSES`] entry that
+/// provides segment, π, Y, G, Φ_x) and its action template.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClassData<'a> {
+    pub name: &'a str,
+    pub action: ActionTemplate,
+}
+
+/// A location type: its stances T_b^ℓ and its workspace Ω+ (if any was learned).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LocationTypeData<'a> {
+    pub name: &'a str,
+    pub stances: heapless::Vec<[f64; 7], MAX_AFFORDANCES>,
+    #[serde(borrow)]
+    pub workspace: Option<FieldData<'a>>,
+}
+
+/// A part type and its grasps T_e^p.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PartTypeData<'a> {
+    pub name: &'a str,
+    pub grasps: heapless::Vec<[f64; 7], MAX_AFFORDANCES>,
+}
+
+/// A trained RDMP: shared DMP parameters, durations and goal data as f64, forcing weights
+/// as f32 (little endian, [`RDMP_COORDS`] × n_basis: position x y z, rotation x y z, γ).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RdmpData<'a> {
+    pub n_basis: u8,
+    pub alpha_z: f64,
+    pub beta_z: f64,
+    pub alpha_zeta: f64,
+    pub min_amplitude: f64,
+    pub tau: f64,
+    /// Bit c set: coordinate c's forcing term is scaled by its amplitude (Eq. 3).
+    pub scaled: u8,
+    pub travel: [f64; 3],
+    pub gamma_goal: f64,
+    #[serde(borrow)]
+    pub weights: &'a [u8],
+}
+
+impl<'a> RdmpData<'a> {
+    /// Compact form of a trained RDMP; `weights` receives the f32 bytes to borrow.
+    pub fn encode(r: &Rdmp, weights: &'a mut [u8]) -> Option<Self> {
+        let p = r.position.params;
+        let n = p.n_basis;
+        if weights.len() != RDMP_COORDS * n * 4 {
+            return None;
+        }
+        let mut scaled = 0u8;
+        let mut put = |c: usize, w: &[f64; MAX_BASES], s: bool| {
+            for i in 0..n {
+                let at = (c * n + i) * 4;
+                weights[at..at + 4].copy_from_slice(&(w[i] as f32).to_le_bytes());
+            }
+            if s {
+                scaled |= 1 << c;
+            }
+        };
+        for c in 0..3 {
+            put(
+                c,
+                &r.position.forcing.weights[c],
+                r.position.forcing.scaled[c],
+            );
+            put(
+                3 + c,
+                &r.rotation.forcing.weights[c],
+                r.rotation.forcing.scaled[c],
+            );
+        }
+        put(6, &r.gamma.forcing.weights[0], r.gamma.forcing.scaled[0]);
+        Some(RdmpData {
+            n_basis: n as u8,
+            alpha_z: p.alpha_z,
+            beta_z: p.beta_z,
+            alpha_zeta: p.alpha_zeta,
+            min_amplitude: p.min_amplitude,
+            tau: r.position.tau,
+            scaled,
+            travel: r.rotation.travel.into(),
+            gamma_goal: r.gamma_goal,
+            weights: &weights[..],
+        })
+    }
+
+    /// The working RDMP (one skill's weights widened to f64 while it is used).
+    pub fn decode(&self) -> Option<Rdmp> {
+        let n = self.n_basis as usize;
+        let params = DmpParams {
+            n_basis: n,
+            alpha_z: self.alpha_z,
+            beta_z: self.beta_z,
+            alpha_zeta: self.alpha_zeta,
+            min_amplitude: self.min_amplitude,
+            ridge: 0.0,
+        };
+        let finite = [
+            self.alpha_z,
+            self.beta_z,
+            self.alpha_zeta,
+            self.tau,
+            self.gamma_goal,
+        ]
+        .iter()
+        .chain(&self.travel)
+        .all(|v| v.is_finite());
+        if !(2..=MAX_BASES).contains(&n)
+            || self.weights.len() != RDMP_COORDS * n * 4
+            || !finite
+            || !(self.tau > 0.0)
+        {
+            return None;
+        }
+        let w = |c: usize| {
+            let mut out = [0.0; MAX_BASES];
+            for (i, o) in out.iter_mut().take(n).enumerate() {
+                let at = (c * n + i) * 4;
+                let b = &self.weights[at..at + 4];
+                *o = f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64;
+            }
+            out
+        };
+        if (0..RDMP_COORDS).any(|c| w(c).iter().any(|v| !v.is_finite())) {
+            return None;
+        }
+        let s = |c: usize| self.scaled & (1 << c) != 0;
+        let forcing3 = |c0: usize| Forcing {
+            weights: [w(c0), w(c0 + 1), w(c0 + 2)],
+            scaled: [s(c0), s(c0 + 1), s(c0 + 2)],
+        };
+        Some(Rdmp {
+            position: PositionDmp {
+                params,
+                tau: self.tau,
+                forcing: forcing3(0),
+            },
+            rotation: RotationDmp {
+                params,
+                tau: self.tau,
+                forcing: forcing3(3),
+                travel: Vector3::from(self.travel),
+            },
+            gamma: PositionDmp {
+                params,
+                tau: self.tau,
+                forcing: Forcing {
+                    weights: [w(6)],
+                    scaled: [s(6)],
+                },
+            },
+            gamma_goal: self.gamma_goal,
+        })
+    }
+}
+
+/// A skill κ = (m, π): its class and, for classes with a learnable generator, its RDMP.
+/// `location_type`, `part_type` and `demo` say where it was learned (for reports); `shared`
+/// marks a copy made by share().
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SkillData<'a> {
+    pub class: u8,
+    pub rdmp: Option<u16>,
+    pub location_type: Option<u8>,
+    pub part_type: Option<u8>,
+    pub demo: &'a str,
+    pub shared: bool,
+}
+
+/// The payload.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Payload<'a> {
+    pub description: &'a str,
+    /// Clearances the workspaces were learned with: demonstrations r_d and acceptable r, m.
+    pub clearance_demo: f64,
+    pub clearance_acceptable: f64,
+    pub robot: RobotData,
+    #[serde(borrow)]
+    pub classes: Table<'a>,
+    #[serde(borrow)]
+    pub location_types: Table<'a>,
+    #[serde(borrow)]
+    pub part_types: Table<'a>,
+    #[serde(borrow)]
+    pub rdmps: Table<'a>,
+    #[serde(borrow)]
+    pub skills: Table<'a>,
+}
+
+/// A validated blob: every record decodes, every reference resolves, every field is valid.
+#[derive(Clone, Debug)]
+pub struct Blob<'a> {
+    pub payload: Payload<'a>,
+}
+
+impl<'a> Blob<'a> {
+    /// Checks header, version, length and CRC, decodes the payload and validates every
+    /// record once, so later accesses cannot find anything malformed.
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, BlobError> {
+        if bytes.len() < HEADER_LEN {
+            return Err(BlobError::Truncated {
+                needed: HEADER_LEN,
+                got: bytes.len(),
+            });
+        }
+        if bytes[..8] != MAGIC {
+            return Err(BlobError::BadMagic);
+        }
+        let u32_at =
+            |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
+        let version = u32_at(8);
+        if version != VERSION {
+            return Err(BlobError::Version {
+                found: version,
+                supported: VERSION,
+            });
+        }
+        let len = u32_at(12) as usize;
+        let total = HEADER_LEN.saturating_add(len);
+        if bytes.len() < total {
+            return Err(BlobError::Truncated {
+                needed: total,
+                got: bytes.len(),
+            });
+        }
+        if bytes.len() > total {
+            return Err(BlobError::TrailingBytes {
+                declared: total,
+                got: bytes.len(),
+            });
+        }
+        let payload = &bytes[HEADER_LEN..];
+        let (expected, found) = (u32_at(16), crc32(payload));
+        if expected != found {
+            return Err(BlobError::Checksum { expected, found });
+        }
+        let payload: Payload<'a> =
+            postcard::from_bytes(payload).map_err(|_| BlobError::Decode {
+                section: Section::Payload,
+                index: 0,
+            })?;
+        let blob = Blob { payload };
+        blob.validate()?;
+        Ok(blob)
+    }
+
+    fn validate(&self) -> Result<(), BlobError> {
+        let p = &self.payload;
+        p.robot.to_model()?;
+        for i in 0..p.classes.len() {
+            let c = self.class(i)?;
+            if crate::motion::class(c.name).is_none() {
+                return Err(BlobError::Reference {
+                    section: Section::Classes,
+                    index: i,
+                });
+            }
+        }
+        for i in 0..p.location_types.len() {
+            let l = self.location_type(i)?;
+            check_poses(&l.stances, Section::LocationTypes, i)?;
+            if let Some(f) = &l.workspace {
+                Field::new(f).map_err(|error| BlobError::Field {
+                    location_type: i,
+                    error,
+                })?;
+            }
+        }
+        for i in 0..p.part_types.len() {
+            check_poses(&self.part_type(i)?.grasps, Section::PartTypes, i)?;
+        }
+        for i in 0..p.rdmps.len() {
+            self.rdmp(i)?;
+        }
+        for i in 0..p.skills.len() {
+            let s = self.skill(i)?;
+            let bad = BlobError::Reference {
+                section: Section::Skills,
+                index: i,
+            };
+            let ok = (s.class as usize) < p.classes.len()
+                && s.rdmp.is_none_or(|r| (r as usize) < p.rdmps.len())
+                && s.location_type
+                    .is_none_or(|l| (l as usize) < p.location_types.len())
+                && s.part_type
+                    .is_none_or(|t| (t as usize) < p.part_types.len());
+            if !ok {
+                return Err(bad);
+            }
+        }
+        Ok(())
+    }
+
+    pub fn robot(&self) -> Result<RobotModel, BlobError> {
+        self.payload.robot.to_model()
+    }
+
+    pub fn class(&self, i: usize) -> Result<ClassData<'a>, BlobError> {
+        self.payload.classes.get(i, Section::Classes)
+    }
+
+    pub fn location_type(&self, i: usize) -> Result<LocationTypeData<'a>, BlobError> {
+        self.payload.location_types.get(i, Section::LocationTypes)
+    }
+
+    pub fn part_type(&self, i: usize) -> Result<PartTypeData<'a>, BlobError> {
+        self.payload.part_types.get(i, Section::PartTypes)
+    }
+
+    /// RDMP `i`, decoded into its working form.
+    pub fn rdmp(&self, i: usize) -> Result<Rdmp, BlobError> {
+        let d: RdmpData<'a> = self.payload.rdmps.get(i, Section::Rdmps)?;
+        d.decode().ok_or(BlobError::Decode {
+            section: Section::Rdmps,
+            index: i,
+        })
+    }
+
+    pub fn skill(&self, i: usize) -> Result<SkillData<'a>, BlobError> {
+        self.payload.skills.get(i, Section::Skills)
+    }
+
+    /// Index of the location type called `name`.
+    pub fn location_type_index(&self, name: &str) -> Option<usize> {
+        (0..self.payload.location_types.len())
+            .find(|&i| self.location_type(i).is_ok_and(|l| l.name == name))
+    }
+
+    /// Index of the part type called `name`.
+    pub fn part_type_index(&self, name: &str) -> Option<usize> {
+        (0..self.payload.part_types.len())
+            .find(|&i| self.part_type(i).is_ok_and(|p| p.name == name))
+    }
+}
+
+fn check_poses(poses: &[[f64; 7]], section: Section, index: usize) -> Result<(), BlobError> {
+    let ok = poses.iter().all(|p| {
+        let q = libm::sqrt(p[3] * p[3] + p[4] * p[4] + p[5] * p[5] + p[6] * p[6]);
+        p.iter().all(|v| v.is_finite()) && libm::fabs(q - 1.0) < 1e-6
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(BlobError::Reference { section, index })
+    }
+}

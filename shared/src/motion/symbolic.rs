@@ -1,0 +1,82 @@
+//! The planning domain of part transportation (Sec. 5.3.2): state variables at, robAt,
+//! holding over symbolic names, and action templates α = (head, pre, eff) over them.
+
+use heapless::Vec;
+use serde::{Deserialize, Serialize};
+
+/// Maximum parameters of an action template.
+pub const MAX_PARAMS: usize = 3;
+/// Maximum atoms of a precondition or effect list.
+pub const MAX_ATOMS: usize = 6;
+
+/// State variables SV = {at, robAt, holding}.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum StateVar {
+    /// at(part, location) ∈ {True, False}.
+    At,
+    /// robAt(location) ∈ {True, False}.
+    RobAt,
+    /// holding() ∈ {None, part}.
+    Holding,
+}
+
+/// Kind of an action parameter (a symbolic name of B).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Param {
+    Part,
+    Location,
+}
+
+/// The value an atom requires or sets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Value {
+    True,
+    False,
+    /// `None` of B: holding nothing.
+    Nothing,
+    /// The action's parameter with this index.
+    Param(u8),
+}
+
+/// An atomic formula var(args…) = value; `args` are indices into the action's parameters.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Atom {
+    pub var: StateVar,
+    pub args: Vec<u8, 2>,
+    pub value: Value,
+}
+
+impl Atom {
+    /// `var(args) = value`; `args` longer than 2 is a programming error caught by tests.
+    pub fn new(var: StateVar, args: &[u8], value: Value) -> Self {
+        Atom {
+            var,
+            args: Vec::from_slice(args).unwrap_or_default(),
+            value,
+        }
+    }
+}
+
+/// α = (head, pre, eff).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ActionTemplate {
+    pub head: heapless::String<16>,
+    pub params: Vec<Param, MAX_PARAMS>,
+    pub pre: Vec<Atom, MAX_ATOMS>,
+    pub eff: Vec<Atom, MAX_ATOMS>,
+}
+
+impl ActionTemplate {
+    /// Builds a template; inputs beyond the fixed capacities are a programming error caught
+    /// by the motion-class tests (the result would lack them).
+    pub fn new(head: &str, params: &[Param], pre: &[Atom], eff: &[Atom]) -> Self {
+        let mut h = heapless::String::new();
+        let _ = h.push_str(head);
+        ActionTemplate {
+            head: h,
+            params: Vec::from_slice(params).unwrap_or_default(),
+            pre: pre.iter().cloned().collect(),
+            eff: eff.iter().cloned().collect(),
+        }
+    }
+}

@@ -1,0 +1,85 @@
+//! The risk of a trajectory in a learned workspace (Eq. 16): the one home of the risk,
+//! used by learning, planning and tests alike.
+//!
+//! R(q(t), Ω+) = η(max_t max_j (sdf_Ω+(c_j(t)) + r_j)) with η(x) = max(x, 0): the deepest
+//! any collision sphere (centre c_j, radius r_j) reaches out of the dilated safe workspace.
+//! With a conservative field (see [`crate::field`]) a risk of 0 certifies that every sphere
+//! stays inside Ω+.
+
+use crate::field::DistanceField;
+use crate::kinematics::ArmKinematics;
+use crate::robot::{MAX_SPHERES, RobotModel};
+use crate::se3::Pose;
+use nalgebra::Vector3;
+
+/// η(x) = max(x, 0) (Sec. 4.1).
+#[inline]
+pub fn eta(x: f64) -> f64 {
+    if x > 0.0 { x } else { 0.0 }
+}
+
+/// max_j (sdf(c_j) + r_j) over the robot's spheres at arm configuration `kin`, with the arm
+/// base at `arm_base` in the field's frame. Before η; NaN if any input is NaN.
+pub fn configuration_excess(
+    model: &RobotModel,
+    field: &impl DistanceField,
+    arm_base: &Pose,
+    kin: &ArmKinematics,
+) -> f64 {
+    let mut centres = [Vector3::zeros(); MAX_SPHERES];
+    kin.sphere_centres(model, &mut centres);
+    let mut worst = f64::NEG_INFINITY;
+    for (s, c) in model.spheres.iter().zip(&centres) {
+        let d = field.distance(&arm_base.transform_point(&(*c).into()).coords) + s.radius;
+        if d.is_nan() {
+            return f64::NAN;
+        }
+        worst = worst.max(d);
+    }
+    worst
+}
+
+/// Running maximum of Eq. 16 along a trajectory, one configuration at a time (the planner's
+/// and the executor's per-step call).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RiskAccumulator {
+    excess: f64,
+}
+
+impl Default for RiskAccumulator {
+    fn default() -> Self {
+        RiskAccumulator {
+            excess: f64::NEG_INFINITY,
+        }
+    }
+}
+
+impl RiskAccumulator {
+    /// Adds one configuration; returns the risk so far. A NaN excess makes the risk infinite
+    /// (never certified).
+    pub fn add(
+        &mut self,
+        model: &RobotModel,
+        field: &impl DistanceField,
+        arm_base: &Pose,
+        kin: &ArmKinematics,
+    ) -> f64 {
+        let e = configuration_excess(model, field, arm_base, kin);
+        self.excess = if e.is_nan() {
+            f64::INFINITY
+        } else {
+            self.excess.max(e)
+        };
+        self.risk()
+    }
+
+    /// η(max excess); 0 for an empty trajectory.
+    pub fn risk(&self) -> f64 {
+        eta(self.excess)
+    }
+
+    /// The maximum excess before η (negative: the margin by which the trajectory is inside).
+    pub fn excess(&self) -> f64 {
+        self.excess
+    }
+}
