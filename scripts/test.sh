@@ -45,6 +45,10 @@ rm -rf "$smoke"
 cargo run --locked -q -p prf-offline --bin prf -- gen --only 0-1,20,60 -o "$smoke" --quiet
 cargo run --locked -q -p prf-offline --bin prf -- check-dataset "$smoke" --world example | tail -n 2
 
+step "CLI smoke run: prf learn (those 4) + prf inspect"
+cargo run --locked -q -p prf-offline --bin prf -- learn "$smoke" -o "$smoke/cell.blob" --quiet
+cargo run --locked -q -p prf-offline --bin prf -- inspect "$smoke/cell.blob" | tail -n 4
+
 step "cargo test (workspace)"
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT

@@ -148,7 +148,7 @@ fn kib(b: usize) -> String {
 
 /// A validated blob's contents and sizes, as `prf inspect` prints them.
 pub fn report(bytes: &[u8]) -> anyhow::Result<String> {
-    let blob = Blob::parse(bytes).map_err(|e| anyhow::anyhow!("invalid blob: {e:?}"))?;
+    let blob = Blob::parse(bytes).map_err(|e| anyhow::anyhow!("invalid blob: {e}"))?;
     let p = &blob.payload;
     let robot = blob.robot().map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let mut o = String::new();

@@ -30,13 +30,13 @@ pub struct Args {
     #[arg(long, default_value_t = 0.03)]
     pub clearance: f64,
     /// Workspace voxel (node spacing), m.
-    #[arg(long, default_value_t = 0.04)]
+    #[arg(long, default_value_t = 0.05)]
     pub voxel: f64,
     /// Bricks whose nodes are all at least this far outside Ω+ store one value, m.
-    #[arg(long, default_value_t = 0.12)]
+    #[arg(long, default_value_t = 0.08)]
     pub far: f64,
     /// Every demonstrated sphere is certified with this margin, m.
-    #[arg(long, default_value_t = 0.005)]
+    #[arg(long, default_value_t = 0.001)]
     pub margin: f64,
     /// Print nothing but errors.
     #[arg(short, long)]

@@ -69,6 +69,39 @@ pub enum BlobError {
     },
 }
 
+impl core::fmt::Display for BlobError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            BlobError::Truncated { needed, got } => {
+                write!(f, "truncated: {got} bytes, the header needs {needed}")
+            }
+            BlobError::BadMagic => write!(f, "not a PRF blob (bad magic)"),
+            BlobError::Version { found, supported } => write!(
+                f,
+                "format version {found}, this build reads version {supported}"
+            ),
+            BlobError::TrailingBytes { declared, got } => {
+                write!(f, "{got} bytes, the header declares {declared}")
+            }
+            BlobError::Checksum { expected, found } => write!(
+                f,
+                "corrupt: payload CRC-32 {found:08x}, header says {expected:08x}"
+            ),
+            BlobError::Decode { section, index } => {
+                write!(f, "{section:?} record {index} does not decode")
+            }
+            BlobError::Model(e) => write!(f, "invalid robot model: {e:?}"),
+            BlobError::Field {
+                location_type,
+                error,
+            } => write!(f, "workspace of location type {location_type}: {error:?}"),
+            BlobError::Reference { section, index } => {
+                write!(f, "{section:?} record {index} refers to something missing")
+            }
+        }
+    }
+}
+
 /// Sections of the payload, for error reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Section {

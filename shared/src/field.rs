@@ -24,7 +24,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// Nodes per brick edge.
-pub const BRICK: usize = 4;
+pub const BRICK: usize = 2;
 /// Nodes per brick.
 pub const BRICK_NODES: usize = BRICK * BRICK * BRICK;
 /// Bytes per stored node.

@@ -51,12 +51,12 @@ impl Default for WorkspaceConfig {
     fn default() -> Self {
         WorkspaceConfig {
             epsilon: 0.02,
-            voxel: 0.04,
-            resample: 0.005,
+            voxel: 0.05,
+            resample: 0.002,
             feature_spacing: 0.01,
             reach: 0.08,
-            far: 0.12,
-            certify_margin: 0.005,
+            far: 0.08,
+            certify_margin: 0.001,
         }
     }
 }
