@@ -7,8 +7,8 @@
 //!    robot sphere (c_j, r_j) becomes the ball B(c_j, r_j + ε) in the location frame.
 //!    Ω+ is their union.
 //! 2. **Features**: every grid node within reach of a ball gets the ball deepest at it,
-//!    argmin_k |v − c_k| − R_k (exact signed distance of the union outside, a conservative
-//!    bound inside).
+//!    argmin_k |v − c_k| − R_k over the balls thinned to [`WorkspaceConfig::feature_spacing`]
+//!    (a subset of Ω+, so every value is an upper bound of the signed distance).
 //! 3. **Far field**: nodes no ball reaches get the exact Euclidean distance transform
 //!    ([`super::edt`]) to the nearest node inside Ω+, an upper bound of their distance.
 //! 4. **Encoding**: bricks far outside become uniform; feature balls are quantized
