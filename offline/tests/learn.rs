@@ -145,11 +145,9 @@ fn arm_instances(f: &Fixture, d: &Demonstration) -> Vec<(usize, Pose, Vec<[f64; 
 }
 
 /// Risk (Eq. 16) of a configuration path, evaluated at the samples and linearly in between
-/// (no sphere moves more than 2 mm between evaluations).
+/// (8 evaluations per sample interval).
 fn path_risk(model: &RobotModel, field: &Field, base: &Pose, path: &[[f64; 7]]) -> f64 {
     let mut acc = RiskAccumulator::default();
-    let mut sweep = Sweep::default();
-    sweep.add_path(model, &Pose::identity(), path, 0.002);
     for w in path.windows(2) {
         let (a, b) = (JointVector::from(w[0]), JointVector::from(w[1]));
         let n = 8;

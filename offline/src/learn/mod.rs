@@ -149,7 +149,6 @@ fn lessons(
     d: &Demonstration,
     cfg: &LearnConfig,
 ) -> anyhow::Result<Vec<Lesson>> {
-    let type_of = |id: &str| ds.locations.iter().position(|l| l.id == id);
     let kinds: Vec<String> = location_kinds(ds);
     let part_kinds = part_kinds(ds);
     let part_type = part_kinds
@@ -161,11 +160,9 @@ fn lessons(
         let mut instances = Vec::new();
         m.segment(&d.samples, &mut |i| instances.push(i));
         for inst in instances {
-            let at = |l: TaskLocation| {
-                let p = location_of(d, l);
-                type_of(&p.id).and_then(|_| kinds.iter().position(|k| *k == p.kind))
-            };
-            let location_type = inst.location.and_then(at);
+            let location_type = inst
+                .location
+                .and_then(|l| kinds.iter().position(|k| *k == location_of(d, l).kind));
             let fr = m.frames();
             let affordance = match (
                 frame_pose(model, d, &inst, fr.robot)?,

@@ -19,7 +19,7 @@ pub use segment::{ArmSegment, Instance, TaskLocation};
 pub use symbolic::{ActionTemplate, Atom, Param, StateVar, Value};
 
 use crate::JointVector;
-use crate::kinematics::{ArmKinematics, arm_base_pose};
+use crate::kinematics::ArmKinematics;
 use crate::robot::RobotModel;
 use crate::se3::Pose;
 
@@ -160,9 +160,4 @@ pub static CLASSES: [&dyn MotionClass; 3] = [&pick::Pick, &place::Place, &base_m
 /// The class called `name`.
 pub fn class(name: &str) -> Option<&'static dyn MotionClass> {
     CLASSES.iter().copied().find(|c| c.name() == name)
-}
-
-/// World pose of the arm base at a program sample.
-pub fn arm_base_at(model: &RobotModel, s: &Sample) -> Pose {
-    arm_base_pose(model, s.base)
 }
