@@ -4,8 +4,10 @@
 pub mod compile;
 pub mod dataset;
 pub mod demogen;
+pub mod execute;
 pub mod learn;
 pub mod robot_file;
+pub mod tasks;
 pub mod validate;
 pub mod world;
 

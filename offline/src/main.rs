@@ -5,6 +5,7 @@ mod check;
 mod demo;
 mod generate;
 mod learn_cmd;
+mod plan_cmd;
 mod plot;
 mod synthetic;
 
@@ -38,6 +39,9 @@ enum Command {
     Learn(learn_cmd::Args),
     /// Validate a blob and print its contents and size by section.
     Inspect(learn_cmd::InspectArgs),
+    /// Plan a task with the runtime (task plan, SkillPlan-PTT with minimum risk), print the
+    /// choice, optionally export the program at 1 kHz; `--all` plans every task of the cell.
+    Plan(plan_cmd::Args),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -49,5 +53,6 @@ fn main() -> anyhow::Result<()> {
         Some(Command::CheckDataset(args)) => check::run(&args),
         Some(Command::Learn(args)) => learn_cmd::run(&args),
         Some(Command::Inspect(args)) => learn_cmd::inspect(&args),
+        Some(Command::Plan(args)) => plan_cmd::run(&args),
     }
 }

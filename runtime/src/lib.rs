@@ -1,6 +1,25 @@
-//! `prf-runtime`: the cell runtime (blob loading, task planning, fixed-rate executor).
-//! `#![no_std]`, no allocation. Its modules arrive with the runtime issue; for now it re-exports
-//! the math core it is built on.
+//! `prf-runtime`: the cell runtime of the Program Reuse Framework. `#![no_std]`, no
+//! allocation, no clock, no IPC: a pure function of (blob bytes, task, time, measured state).
+//!
+//! - [`load`]: [`Runtime::load`] validates a blob and reads it in place;
+//! - [`task`]: the task T and its symbolic feasibility (Sec. 6.1);
+//! - [`task_plan`]: forward search over the blob's action templates;
+//! - [`skill_plan`]: SkillPlan-PTT (Alg. 4), decomposed and pruned;
+//! - [`plan`]: all of the above in order, giving a [`plan::Plan`] and its [`program::Program`];
+//! - [`executor`]: the 1 kHz state machine, with [`reverse`] for the reversed arm motions.
 #![no_std]
 
+pub mod executor;
+pub mod load;
+pub mod plan;
+pub mod program;
+pub mod reverse;
+pub mod skill_plan;
+pub mod task;
+pub mod task_plan;
+
+pub use executor::{Executor, ExecutorConfig, Fault, Measured, Mode, Setpoint};
+pub use load::{LoadError, Runtime, RuntimeConfig};
+pub use plan::{Plan, PlanError, plan};
 pub use prf_shared as shared;
+pub use task::{Placed, Task};

@@ -42,6 +42,24 @@ pub const CERT_BYTES: usize = 12;
 /// inside the set).
 pub trait DistanceField {
     fn distance(&self, p: &Vector3<f64>) -> f64;
+
+    /// The distance at `p` if it is above `stop`; otherwise any upper bound of it that is at
+    /// most `stop` (the lookup may stop at the first term that settles the comparison).
+    /// `hint` carries what settled the previous lookup of the same moving point.
+    fn distance_upto(&self, p: &Vector3<f64>, stop: f64, hint: &mut Hint) -> f64 {
+        let _ = (stop, hint);
+        self.distance(p)
+    }
+}
+
+/// The lookup term that settled the last lookup of a point (a sphere centre along a
+/// trajectory): its cell and term (1–8: a corner; 9 + i: certificate i; 0: none). The next
+/// lookup tries it first if the point is still in that cell. Only the order of evaluation
+/// changes, never the result.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Hint {
+    cell: u32,
+    term: u32,
 }
 
 /// Serialized form of a field (postcard); the byte arrays are borrowed from the blob.
@@ -82,11 +100,27 @@ pub enum FieldError {
 pub struct Field<'a> {
     origin: Vector3<f64>,
     h: f64,
+    inv_h: f64,
+    /// Location-frame position of the last node.
+    top: Vector3<f64>,
     dims: [usize; 3],
     bricks_per_axis: [usize; 3],
     bricks: &'a [u8],
     nodes: &'a [u8],
     certificates: &'a [u8],
+}
+
+/// |x − b| − r, or `stop` when that is at most `stop` (decided on squared distances, without
+/// a square root).
+#[inline]
+fn ball_bound(x: &Vector3<f64>, b: &Vector3<f64>, r: f64, stop: f64) -> f64 {
+    let reach = stop + r;
+    let d2 = (x - b).norm_squared();
+    if reach >= 0.0 && d2 <= reach * reach {
+        stop
+    } else {
+        libm::sqrt(d2) - r
+    }
 }
 
 enum Node {
@@ -129,9 +163,17 @@ impl<'a> Field<'a> {
             }
             last = cell;
         }
+        let top = origin
+            + Vector3::new(
+                (dims[0] - 1) as f64,
+                (dims[1] - 1) as f64,
+                (dims[2] - 1) as f64,
+            ) * h;
         Ok(Field {
             origin,
             h,
+            inv_h: 1.0 / h,
+            top,
             dims,
             bricks_per_axis,
             bricks: d.bricks,
@@ -185,64 +227,129 @@ impl<'a> Field<'a> {
     }
 
     /// Upper bound of the signed distance at x contributed by node (i, j, k).
-    fn node_bound(&self, i: usize, j: usize, k: usize, x: &Vector3<f64>) -> f64 {
+    ///
+    /// When the bound is at most `stop`, `stop` itself may be returned (decided on squared
+    /// distances, without a square root).
+    fn node_bound(&self, i: usize, j: usize, k: usize, x: &Vector3<f64>, stop: f64) -> f64 {
         match self.node(i, j, k) {
-            Node::Ball(b, r) => (x - b).norm() - r,
+            Node::Ball(b, r) => ball_bound(x, &b, r, stop),
             Node::Scalar(s) => s + (x - self.node_position(i, j, k)).norm(),
         }
     }
 
-    /// The certificate balls of cell `cell` (binary search in the sorted list).
-    fn certificate_bound(&self, cell: u32, x: &Vector3<f64>) -> f64 {
-        let n = self.certificates.len() / CERT_BYTES;
-        let key = |i: usize| {
-            let c = &self.certificates[i * CERT_BYTES..];
-            u32::from_le_bytes([c[0], c[1], c[2], c[3]])
-        };
-        let (mut lo, mut hi) = (0, n);
+    /// Number of certificate balls.
+    fn certificate_count(&self) -> usize {
+        self.certificates.len() / CERT_BYTES
+    }
+
+    /// Cell of certificate `i` (< count).
+    fn certificate_cell(&self, i: usize) -> u32 {
+        let c = &self.certificates[i * CERT_BYTES..];
+        u32::from_le_bytes([c[0], c[1], c[2], c[3]])
+    }
+
+    /// First certificate of cell `cell` or later (binary search in the sorted list).
+    fn first_certificate(&self, cell: u32) -> usize {
+        let (mut lo, mut hi) = (0, self.certificate_count());
         while lo < hi {
             let mid = (lo + hi) / 2;
-            if key(mid) < cell {
+            if self.certificate_cell(mid) < cell {
                 lo = mid + 1;
             } else {
                 hi = mid;
             }
         }
-        let mut best = f64::INFINITY;
-        let mut i = lo;
-        while i < n && key(i) == cell {
-            let c = &self.certificates[i * CERT_BYTES..(i + 1) * CERT_BYTES];
-            let v = |o: usize| i16::from_le_bytes([c[o], c[o + 1]]) as f64 * MM;
-            let centre = Vector3::new(v(4), v(6), v(8));
-            let r = u16::from_le_bytes([c[10], c[11]]) as f64 * MM;
-            best = best.min((x - centre).norm() - r);
-            i += 1;
-        }
-        best
+        lo
+    }
+
+    /// Term of certificate ball `i` at `x` (`stop` as in [`Field::node_bound`]).
+    fn certificate_bound(&self, i: usize, x: &Vector3<f64>, stop: f64) -> f64 {
+        let c = &self.certificates[i * CERT_BYTES..(i + 1) * CERT_BYTES];
+        let v = |o: usize| i16::from_le_bytes([c[o], c[o + 1]]) as f64 * MM;
+        let centre = Vector3::new(v(4), v(6), v(8));
+        let r = u16::from_le_bytes([c[10], c[11]]) as f64 * MM;
+        ball_bound(x, &centre, r, stop)
     }
 
     /// Cell containing the grid-box point with grid coordinates `g`.
     fn cell_of(&self, g: &Vector3<f64>) -> [usize; 3] {
-        core::array::from_fn(|a| {
-            let c = libm::floor(g[a]);
-            (if c > 0.0 { c as usize } else { 0 }).min(self.dims[a] - 2)
-        })
+        // Truncation is floor for g ≥ 0; below 0 (and NaN) clamps to cell 0.
+        core::array::from_fn(|a| (if g[a] > 0.0 { g[a] as usize } else { 0 }).min(self.dims[a] - 2))
     }
 
     /// The lookup terms of cell `c` (its 8 corner nodes and its certificates) evaluated at
     /// `x`: an upper bound of the signed distance at any `x`, the field's value for `x` in
     /// the cell. `c` must be a cell of the grid (from [`Field::cell_at`]).
     pub fn distance_in_cell(&self, c: [usize; 3], x: &Vector3<f64>) -> f64 {
-        let mut best = f64::INFINITY;
-        for di in 0..2 {
-            for dj in 0..2 {
-                for dk in 0..2 {
-                    best = best.min(self.node_bound(c[0] + di, c[1] + dj, c[2] + dk, x));
+        self.distance_in_cell_upto(c, x, f64::NEG_INFINITY, &mut Hint::default())
+    }
+
+    /// Term `term` of cell `c` ([`Hint`] numbering) at `x`; ∞ for a term the cell lacks.
+    fn term(&self, c: [usize; 3], cell: u32, term: u32, x: &Vector3<f64>, stop: f64) -> f64 {
+        match term {
+            1..=8 => {
+                let d = (term - 1) as usize;
+                self.node_bound(
+                    c[0] + (d >> 2 & 1),
+                    c[1] + (d >> 1 & 1),
+                    c[2] + (d & 1),
+                    x,
+                    stop,
+                )
+            }
+            9.. => {
+                let i = (term - 9) as usize;
+                if i < self.certificate_count() && self.certificate_cell(i) == cell {
+                    self.certificate_bound(i, x, stop)
+                } else {
+                    f64::INFINITY
                 }
             }
+            0 => f64::INFINITY,
         }
-        if !self.certificates.is_empty() {
-            best = best.min(self.certificate_bound(self.cell_index(c), x));
+    }
+
+    /// [`Field::distance_in_cell`], stopping at the first term ≤ `stop`: the hinted term
+    /// first, then the corners nearest first, then the certificates.
+    fn distance_in_cell_upto(
+        &self,
+        c: [usize; 3],
+        x: &Vector3<f64>,
+        stop: f64,
+        hint: &mut Hint,
+    ) -> f64 {
+        let cell = self.cell_index(c);
+        if hint.cell == cell && hint.term != 0 {
+            let v = self.term(c, cell, hint.term, x, stop);
+            if v <= stop {
+                return v;
+            }
+        }
+        let g = (x - self.node_position(c[0], c[1], c[2])) * self.inv_h;
+        let near = (usize::from(g.x >= 0.5) << 2)
+            | (usize::from(g.y >= 0.5) << 1)
+            | usize::from(g.z >= 0.5);
+        let mut best = f64::INFINITY;
+        for k in 0..8 {
+            let term = ((k ^ near) + 1) as u32;
+            best = best.min(self.term(c, cell, term, x, stop));
+            if best <= stop {
+                *hint = Hint { cell, term };
+                return best;
+            }
+        }
+        let n = self.certificate_count();
+        let mut i = self.first_certificate(cell);
+        while i < n && self.certificate_cell(i) == cell {
+            best = best.min(self.certificate_bound(i, x, stop));
+            if best <= stop {
+                *hint = Hint {
+                    cell,
+                    term: 9 + i as u32,
+                };
+                return best;
+            }
+            i += 1;
         }
         best
     }
@@ -254,25 +361,27 @@ impl<'a> Field<'a> {
 
     /// Cell containing location-frame point `x` (clamped to the grid).
     pub fn cell_at(&self, x: &Vector3<f64>) -> [usize; 3] {
-        self.cell_of(&((x - self.origin) / self.h))
+        self.cell_of(&((x - self.origin) * self.inv_h))
     }
 }
 
 impl DistanceField for Field<'_> {
     /// Conservative signed distance at `p` (location frame), m. NaN input gives NaN.
     fn distance(&self, p: &Vector3<f64>) -> f64 {
-        let hi = self.origin
-            + Vector3::new(
-                (self.dims[0] - 1) as f64,
-                (self.dims[1] - 1) as f64,
-                (self.dims[2] - 1) as f64,
-            ) * self.h;
-        let q = p.sup(&self.origin).inf(&hi);
+        self.distance_upto(p, f64::NEG_INFINITY, &mut Hint::default())
+    }
+
+    fn distance_upto(&self, p: &Vector3<f64>, stop: f64, hint: &mut Hint) -> f64 {
+        let inside = (0..3).all(|a| p[a] >= self.origin[a] && p[a] <= self.top[a]);
+        if inside {
+            return self.distance_in_cell_upto(self.cell_at(p), p, stop, hint);
+        }
+        // Outside the grid box (or NaN): the nearest box point's value plus the distance to it.
+        let q = p.sup(&self.origin).inf(&self.top);
         let outside = (p - q).norm();
         if !outside.is_finite() {
             return f64::NAN;
         }
-        let c = self.cell_of(&((q - self.origin) / self.h));
-        self.distance_in_cell(c, &q) + outside
+        self.distance_in_cell_upto(self.cell_at(&q), &q, stop - outside, hint) + outside
     }
 }

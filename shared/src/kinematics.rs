@@ -6,7 +6,7 @@
 use crate::robot::{LINK_TOOL, N_FRAMES, RobotModel};
 use crate::se3::Pose;
 use crate::{Jacobian, JointVector, NA};
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 
 /// Everything one kinematics evaluation yields at a configuration q_a.
 #[derive(Clone, Copy, Debug)]
@@ -52,6 +52,24 @@ impl ArmKinematics {
         for (s, o) in model.spheres.iter().zip(out.iter_mut()) {
             if let Some(frame) = self.frames.get(s.link as usize) {
                 *o = frame.transform_point(&s.centre.into()).coords;
+            }
+        }
+    }
+
+    /// Centres of the collision spheres in the frame where the arm base is at `base`
+    /// (`base · frame · centre`), written to `out` like [`ArmKinematics::sphere_centres`].
+    /// Each frame is composed and turned into a matrix once, not once per sphere.
+    pub fn sphere_centres_in(&self, model: &RobotModel, base: &Pose, out: &mut [Vector3<f64>]) {
+        let frames: [(Matrix3<f64>, Vector3<f64>); N_FRAMES] = core::array::from_fn(|l| {
+            let f = base * self.frames[l];
+            (
+                f.rotation.to_rotation_matrix().into_inner(),
+                f.translation.vector,
+            )
+        });
+        for (s, o) in model.spheres.iter().zip(out.iter_mut()) {
+            if let Some((r, t)) = frames.get(s.link as usize) {
+                *o = r * s.centre + t;
             }
         }
     }

@@ -208,7 +208,54 @@ pub struct RdmpRun {
     previous: Option<(JointVector, JointVector)>,
 }
 
+/// The integration state of an [`RdmpRun`] without its derived tables (bases, features):
+/// about a quarter of its size, and [`RdmpRun::resume`] continues from it bit-identically.
+/// The executor keeps these to replay a motion backwards (Pick's and Place's reversal).
+#[derive(Clone, Copy, Debug)]
+pub struct RdmpCheckpoint {
+    q: JointVector,
+    position: PositionState<3>,
+    rotation: RotationState,
+    gamma: PositionState<1>,
+    step: usize,
+    zeta: f64,
+    zeta_next: f64,
+    gamma_measured: f64,
+    previous: Option<(JointVector, JointVector)>,
+}
+
 impl RdmpRun {
+    /// The state to resume from later.
+    pub fn checkpoint(&self) -> RdmpCheckpoint {
+        RdmpCheckpoint {
+            q: self.q,
+            position: self.position,
+            rotation: self.rotation,
+            gamma: self.gamma,
+            step: self.phase.step,
+            zeta: self.phase.zeta,
+            zeta_next: self.phase.zeta_next,
+            gamma_measured: self.gamma_measured,
+            previous: self.previous,
+        }
+    }
+
+    /// Continues an integration of `rdmp` from a checkpoint taken with the same RDMP and
+    /// step Δt: the following steps equal those of the original run bit for bit.
+    pub fn resume(rdmp: &Rdmp, cfg: &RdmpConfig, c: &RdmpCheckpoint) -> Result<Self, RdmpError> {
+        let p = &rdmp.position;
+        let phase = Phase::resume(&p.params, p.tau, cfg.dt, c.step, c.zeta, c.zeta_next)?;
+        Ok(RdmpRun {
+            q: c.q,
+            position: c.position,
+            rotation: c.rotation,
+            gamma: c.gamma,
+            phase,
+            gamma_measured: c.gamma_measured,
+            previous: c.previous,
+        })
+    }
+
     /// Starts an integration from joint configuration `q0` towards the TCP goal `goal`
     /// (arm base frame).
     pub fn new(
@@ -271,11 +318,24 @@ impl RdmpRun {
         rdmp: &Rdmp,
         cfg: &RdmpConfig,
     ) -> Result<RdmpStep, RdmpError> {
+        self.step_observed(model, rdmp, cfg, |_| {})
+    }
+
+    /// [`RdmpRun::step`], showing `observe` the kinematics of the configuration it steps
+    /// from (so a caller that also needs FK of every configuration computes it once).
+    pub fn step_observed(
+        &mut self,
+        model: &RobotModel,
+        rdmp: &Rdmp,
+        cfg: &RdmpConfig,
+        observe: impl FnOnce(&ArmKinematics),
+    ) -> Result<RdmpStep, RdmpError> {
         let k = self.phase.step;
         if self.phase.finished() {
             return Err(RdmpError::Finished);
         }
         let kin = ArmKinematics::new(model, &self.q);
+        observe(&kin);
         let qr = JacobianQr::new(&kin.jacobian(model));
         let ker = qr.kernel();
         if !(ker.manipulability >= cfg.min_manipulability) {

@@ -6,7 +6,7 @@
 //! With a conservative field (see [`crate::field`]) a risk of 0 certifies that every sphere
 //! stays inside Ω+.
 
-use crate::field::DistanceField;
+use crate::field::{DistanceField, Hint};
 use crate::kinematics::ArmKinematics;
 use crate::robot::{MAX_SPHERES, RobotModel};
 use crate::se3::Pose;
@@ -44,19 +44,27 @@ pub fn configuration_excess(
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RiskAccumulator {
     excess: f64,
+    /// Per sphere, the lookup term that settled it last (evaluation order only).
+    hints: [Hint; MAX_SPHERES],
 }
 
 impl Default for RiskAccumulator {
     fn default() -> Self {
         RiskAccumulator {
             excess: f64::NEG_INFINITY,
+            hints: [Hint::default(); MAX_SPHERES],
         }
     }
 }
 
 impl RiskAccumulator {
-    /// Adds one configuration; returns the risk so far. A NaN excess makes the risk infinite
-    /// (never certified).
+    /// Adds one configuration; returns the risk so far. A NaN makes the risk infinite (never
+    /// certified).
+    ///
+    /// Only spheres that can raise the risk are looked up in full: a sphere whose lookup
+    /// already shows sdf + r ≤ max(excess so far, 0) cannot change η(max), so the lookup
+    /// stops there ([`DistanceField::distance_upto`]). The risk is exact; the excess is exact
+    /// once positive and otherwise an upper bound ≤ 0.
     pub fn add(
         &mut self,
         model: &RobotModel,
@@ -64,12 +72,17 @@ impl RiskAccumulator {
         arm_base: &Pose,
         kin: &ArmKinematics,
     ) -> f64 {
-        let e = configuration_excess(model, field, arm_base, kin);
-        self.excess = if e.is_nan() {
-            f64::INFINITY
-        } else {
-            self.excess.max(e)
-        };
+        let mut centres = [Vector3::zeros(); MAX_SPHERES];
+        kin.sphere_centres_in(model, arm_base, &mut centres);
+        for ((s, p), hint) in model.spheres.iter().zip(&centres).zip(&mut self.hints) {
+            let level = eta(self.excess);
+            let e = field.distance_upto(p, level - s.radius, hint) + s.radius;
+            if e.is_nan() {
+                self.excess = f64::INFINITY;
+                break;
+            }
+            self.excess = self.excess.max(e);
+        }
         self.risk()
     }
 
@@ -78,7 +91,7 @@ impl RiskAccumulator {
         eta(self.excess)
     }
 
-    /// The maximum excess before η (negative: the margin by which the trajectory is inside).
+    /// The maximum excess before η: exact when positive; when ≤ 0 an upper bound (≤ 0).
     pub fn excess(&self) -> f64 {
         self.excess
     }

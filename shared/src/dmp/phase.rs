@@ -97,7 +97,9 @@ pub struct Phase {
     /// Number of steps of the whole motion, round(τ/Δt).
     pub n_steps: usize,
     decay: f64,
-    zeta_next: f64,
+    /// ζ_k and ζ_{k+1}.
+    pub zeta: f64,
+    pub zeta_next: f64,
     /// φ(ζ_k).
     pub current: Features,
     /// φ(ζ_{k+1}).
@@ -117,6 +119,7 @@ impl Phase {
             step: 0,
             n_steps: libm::round(tau / dt) as usize,
             decay,
+            zeta: 1.0,
             zeta_next: decay,
             current: basis.features(1.0),
             next: basis.features(decay),
@@ -126,9 +129,30 @@ impl Phase {
     /// Moves from step k to k+1: one basis evaluation.
     pub fn advance(&mut self) {
         self.step += 1;
+        self.zeta = self.zeta_next;
         self.current = self.next;
         self.zeta_next *= self.decay;
         self.next = self.basis.features(self.zeta_next);
+    }
+
+    /// The phase at step `step` with ζ_k = `zeta`, ζ_{k+1} = `zeta_next` (from a saved
+    /// [`Phase`]): bit-identical to the phase that was saved, since the features are a pure
+    /// function of ζ.
+    pub fn resume(
+        p: &DmpParams,
+        tau: f64,
+        dt: f64,
+        step: usize,
+        zeta: f64,
+        zeta_next: f64,
+    ) -> Result<Self, DmpError> {
+        let mut phase = Phase::new(p, tau, dt)?;
+        phase.step = step;
+        phase.zeta = zeta;
+        phase.zeta_next = zeta_next;
+        phase.current = phase.basis.features(zeta);
+        phase.next = phase.basis.features(zeta_next);
+        Ok(phase)
     }
 
     /// True once all `n_steps` steps are done.

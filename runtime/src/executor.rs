@@ -1,0 +1,377 @@
+//! The executor: a state machine over a program's segments, ticked once per Δt = 1 ms.
+//!
+//! `tick(now, measured)` does bounded work (at most one RDMP step, Alg. 2, and one segment
+//! transition), allocates nothing and cannot panic. Arm segments integrate the planned RDMP
+//! one step per tick from the previous setpoint (open loop in the measured state, so the
+//! executed trajectory is exactly the planned one); the reversal replays it backwards
+//! ([`crate::reverse`]); gripper and platform segments command and wait for the measured
+//! state, with timeouts. A fault (timeout, tracking error, non-finite input, clock going
+//! backwards) moves the executor to `Fault`, which holds the last safe setpoint at rest and
+//! says why.
+
+use crate::load::{LoadError, Runtime};
+use crate::program::{Program, Segment};
+use crate::reverse::{Reversal, ReverseError};
+use embassy_time::{Duration, Instant};
+use prf_shared::rdmp::{Rdmp, RdmpError, RdmpRun};
+use prf_shared::se3::Pose;
+use prf_shared::{JointVector, NA};
+
+/// Tolerances and timeouts of the executor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExecutorConfig {
+    /// Longest wait for the gripper to open or close.
+    pub gripper_timeout: Duration,
+    /// Longest wait for the platform to reach a goal.
+    pub base_timeout: Duration,
+    /// The platform has arrived within this distance, m, and yaw, rad.
+    pub base_position_tolerance: f64,
+    pub base_yaw_tolerance: f64,
+    /// Largest allowed |measured − previous setpoint| of any arm joint, rad.
+    pub tracking_tolerance: f64,
+    /// The gripper counts as closed at or above, open at or below these (0 open, 1 closed).
+    pub gripper_closed: f64,
+    pub gripper_open: f64,
+}
+
+impl Default for ExecutorConfig {
+    fn default() -> Self {
+        ExecutorConfig {
+            gripper_timeout: Duration::from_secs(5),
+            base_timeout: Duration::from_secs(120),
+            base_position_tolerance: 0.005,
+            base_yaw_tolerance: 0.01,
+            tracking_tolerance: 0.1,
+            gripper_closed: 0.95,
+            gripper_open: 0.05,
+        }
+    }
+}
+
+/// The measured state of the cell.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measured {
+    pub arm: [f64; NA],
+    /// Platform [x, y, yaw] in the world.
+    pub base: [f64; 3],
+    /// 0 open … 1 closed.
+    pub gripper: f64,
+}
+
+/// What the executor is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Waiting for the platform to reach `base_goal`.
+    Base,
+    /// Moving the arm.
+    Arm,
+    /// Waiting for the gripper.
+    Gripper,
+    /// Program complete; holding.
+    Done,
+    /// Stopped by a fault; holding the last safe setpoint.
+    Fault,
+}
+
+/// One setpoint, once per tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Setpoint {
+    /// Sequence number: 1 for the first tick, +1 every tick.
+    pub seq: u32,
+    /// The tick's time.
+    pub t: Instant,
+    pub arm: [f64; NA],
+    pub arm_velocity: [f64; NA],
+    pub close_gripper: bool,
+    /// Platform goal [x, y, yaw] (world).
+    pub base_goal: [f64; 3],
+    pub mode: Mode,
+    /// Index of the program segment.
+    pub segment: u8,
+}
+
+/// Why the executor stopped.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Fault {
+    /// Segment `segment` waited longer than its timeout.
+    Timeout {
+        segment: u8,
+    },
+    /// Joint `joint` is `error` rad from the previous setpoint.
+    Tracking {
+        joint: u8,
+        error: f64,
+    },
+    /// The measured state has a non-finite value.
+    NonFinite,
+    /// `now` went backwards.
+    ClockBackwards,
+    /// The RDMP of segment `segment` could not be stepped.
+    Rdmp {
+        segment: u8,
+        error: RdmpError,
+    },
+    Reverse {
+        segment: u8,
+        error: ReverseError,
+    },
+    /// Segment `segment` does not fit the program (a reversal without a forward motion).
+    Program {
+        segment: u8,
+    },
+    Load(LoadError),
+}
+
+impl core::fmt::Display for Fault {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Fault::Timeout { segment } => write!(f, "segment {segment} timed out"),
+            Fault::Tracking { joint, error } => write!(
+                f,
+                "joint A{} is {error:.4} rad from its setpoint",
+                *joint as usize + 1
+            ),
+            Fault::NonFinite => write!(f, "the measured state is not finite"),
+            Fault::ClockBackwards => write!(f, "time went backwards"),
+            Fault::Rdmp { segment, error } => write!(f, "segment {segment}: RDMP {error:?}"),
+            Fault::Reverse { segment, error } => write!(f, "segment {segment}: reversal {error:?}"),
+            Fault::Program { segment } => write!(f, "segment {segment} is malformed"),
+            Fault::Load(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// [x, y, yaw] of a platform pose.
+pub fn planar(p: &Pose) -> [f64; 3] {
+    let yaw = p.rotation.euler_angles().2;
+    [p.translation.x, p.translation.y, yaw]
+}
+
+/// Wraps an angle to (−π, π].
+fn wrap(a: f64) -> f64 {
+    let two_pi = 2.0 * core::f64::consts::PI;
+    let r = a - two_pi * libm::floor((a + core::f64::consts::PI) / two_pi);
+    if r <= -core::f64::consts::PI {
+        r + two_pi
+    } else {
+        r
+    }
+}
+
+/// The executor of one program.
+pub struct Executor<'r, 'a> {
+    rt: &'r Runtime<'a>,
+    program: Program,
+    cfg: ExecutorConfig,
+    reversal: &'r mut Reversal,
+    segment: usize,
+    /// When the current segment was entered (None: not yet).
+    entered: Option<Instant>,
+    rdmp: Option<Rdmp>,
+    run: Option<RdmpRun>,
+    last: Setpoint,
+    fault: Option<Fault>,
+}
+
+impl<'r, 'a> Executor<'r, 'a> {
+    /// An executor at the program's start: arm at q_a,H, gripper open, platform at `home`.
+    /// `reversal` is the (large) working memory of the reversed motions.
+    pub fn new(
+        rt: &'r Runtime<'a>,
+        program: Program,
+        home: &Pose,
+        cfg: ExecutorConfig,
+        reversal: &'r mut Reversal,
+    ) -> Self {
+        let last = Setpoint {
+            seq: 0,
+            t: Instant::from_ticks(0),
+            arm: rt.model.home,
+            arm_velocity: [0.0; NA],
+            close_gripper: false,
+            base_goal: planar(home),
+            mode: Mode::Base,
+            segment: 0,
+        };
+        Executor {
+            rt,
+            program,
+            cfg,
+            reversal,
+            segment: 0,
+            entered: None,
+            rdmp: None,
+            run: None,
+            last,
+            fault: None,
+        }
+    }
+
+    /// The fault that stopped the executor, if any.
+    pub fn fault(&self) -> Option<Fault> {
+        self.fault
+    }
+
+    /// True once every segment completed.
+    pub fn done(&self) -> bool {
+        self.fault.is_none() && self.segment >= self.program.segments.len()
+    }
+
+    /// Index of the segment running.
+    pub fn segment(&self) -> usize {
+        self.segment
+    }
+
+    pub fn program(&self) -> &Program {
+        &self.program
+    }
+
+    /// One tick: the setpoint for `now` given the state measured at `now`.
+    pub fn tick(&mut self, now: Instant, measured: &Measured) -> Setpoint {
+        let mut sp = self.last;
+        sp.seq = self.last.seq.wrapping_add(1);
+        if self.fault.is_none()
+            && let Err(f) = self.advance(now, measured, &mut sp)
+        {
+            self.fault = Some(f);
+            sp = self.last;
+            sp.seq = self.last.seq.wrapping_add(1);
+        }
+        if self.fault.is_some() {
+            sp.mode = Mode::Fault;
+            sp.arm_velocity = [0.0; NA];
+        }
+        sp.t = now;
+        self.last = sp;
+        sp
+    }
+
+    fn finish_segment(&mut self) {
+        self.segment += 1;
+        self.entered = None;
+    }
+
+    fn advance(&mut self, now: Instant, m: &Measured, sp: &mut Setpoint) -> Result<(), Fault> {
+        let finite = m.arm.iter().chain(&m.base).all(|v| v.is_finite()) && m.gripper.is_finite();
+        if !finite {
+            return Err(Fault::NonFinite);
+        }
+        if self.last.seq > 0 && now < self.last.t {
+            return Err(Fault::ClockBackwards);
+        }
+        for (j, (q, s)) in m.arm.iter().zip(&self.last.arm).enumerate() {
+            let error = libm::fabs(q - s);
+            if error > self.cfg.tracking_tolerance {
+                return Err(Fault::Tracking {
+                    joint: j as u8,
+                    error,
+                });
+            }
+        }
+        let Some(seg) = self.program.segments.get(self.segment).copied() else {
+            sp.mode = Mode::Done;
+            sp.arm_velocity = [0.0; NA];
+            return Ok(());
+        };
+        let index = self.segment as u8;
+        sp.segment = index;
+        let entered = *self.entered.get_or_insert(now);
+        let waited = now
+            .checked_duration_since(entered)
+            .unwrap_or(Duration::from_ticks(0));
+        match seg {
+            Segment::Base { goal } => {
+                sp.mode = Mode::Base;
+                sp.arm_velocity = [0.0; NA];
+                sp.base_goal = planar(&goal);
+                let g = sp.base_goal;
+                let (dx, dy) = (m.base[0] - g[0], m.base[1] - g[1]);
+                let there = libm::sqrt(dx * dx + dy * dy) <= self.cfg.base_position_tolerance
+                    && libm::fabs(wrap(m.base[2] - g[2])) <= self.cfg.base_yaw_tolerance;
+                if there {
+                    self.finish_segment();
+                } else if waited > self.cfg.base_timeout {
+                    return Err(Fault::Timeout { segment: index });
+                }
+            }
+            Segment::Grip { close } => {
+                sp.mode = Mode::Gripper;
+                sp.arm_velocity = [0.0; NA];
+                sp.close_gripper = close;
+                let there = if close {
+                    m.gripper >= self.cfg.gripper_closed
+                } else {
+                    m.gripper <= self.cfg.gripper_open
+                };
+                if there {
+                    self.finish_segment();
+                } else if waited > self.cfg.gripper_timeout {
+                    return Err(Fault::Timeout { segment: index });
+                }
+            }
+            Segment::Arm { skill, goal, steps } => {
+                sp.mode = Mode::Arm;
+                let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
+                if self.run.is_none() {
+                    let rdmp = self
+                        .rt
+                        .skill_rdmp(skill as usize)
+                        .map_err(Fault::Load)?
+                        .ok_or(Fault::Program { segment: index })?;
+                    let q0 = JointVector::from(self.last.arm);
+                    let run = RdmpRun::new(model, &rdmp, &q0, &goal, cfg).map_err(|error| {
+                        Fault::Rdmp {
+                            segment: index,
+                            error,
+                        }
+                    })?;
+                    self.reversal
+                        .begin(steps as usize)
+                        .map_err(|error| Fault::Reverse {
+                            segment: index,
+                            error,
+                        })?;
+                    self.rdmp = Some(rdmp);
+                    self.run = Some(run);
+                }
+                let (Some(run), Some(rdmp)) = (self.run.as_mut(), self.rdmp.as_ref()) else {
+                    return Err(Fault::Program { segment: index });
+                };
+                self.reversal.record(run);
+                let step = run.step(model, rdmp, cfg).map_err(|error| Fault::Rdmp {
+                    segment: index,
+                    error,
+                })?;
+                sp.arm = step.q.into();
+                sp.arm_velocity = step.qd.into();
+                if run.finished() {
+                    self.run = None;
+                    self.finish_segment();
+                }
+            }
+            Segment::Reverse { .. } => {
+                sp.mode = Mode::Arm;
+                let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
+                let rdmp = self
+                    .rdmp
+                    .as_ref()
+                    .ok_or(Fault::Program { segment: index })?;
+                let q = self
+                    .reversal
+                    .next(model, rdmp, cfg)
+                    .map_err(|error| Fault::Reverse {
+                        segment: index,
+                        error,
+                    })?
+                    .ok_or(Fault::Program { segment: index })?;
+                let previous = JointVector::from(self.last.arm);
+                sp.arm = q.into();
+                sp.arm_velocity = ((q - previous) / cfg.dt).into();
+                if self.reversal.finished() {
+                    self.finish_segment();
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,137 @@
+//! Loading a blob: validate it once and index it in place (no copy of fields or weights).
+
+use prf_shared::blob::{Blob, BlobError};
+use prf_shared::field::Field;
+use prf_shared::motion::{self, MotionClass};
+use prf_shared::rdmp::{Rdmp, RdmpConfig};
+use prf_shared::robot::RobotModel;
+
+/// Maximum motion classes a blob may declare.
+pub const MAX_CLASSES: usize = 8;
+
+/// Why a blob could not be loaded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LoadError {
+    /// The blob itself is malformed (header, checksum, a record, a reference).
+    Blob(BlobError),
+    /// The blob declares more motion classes than the runtime has room for.
+    TooManyClasses { count: usize },
+}
+
+impl From<BlobError> for LoadError {
+    fn from(e: BlobError) -> Self {
+        LoadError::Blob(e)
+    }
+}
+
+impl core::fmt::Display for LoadError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            LoadError::Blob(e) => write!(f, "invalid blob: {e}"),
+            LoadError::TooManyClasses { count } => write!(
+                f,
+                "the blob declares {count} motion classes, the runtime supports {MAX_CLASSES}"
+            ),
+        }
+    }
+}
+
+/// Settings the planner and the executor share, so the planned trajectory is the executed one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RuntimeConfig {
+    /// RDMP integration (Δt = the executor's tick, 1 ms).
+    pub rdmp: RdmpConfig,
+    /// A task is physically feasible when J* ≤ this risk, m (Sec. 6.1; default 0).
+    pub risk_threshold: f64,
+}
+
+impl Default for RuntimeConfig {
+    fn default() -> Self {
+        RuntimeConfig {
+            rdmp: RdmpConfig::default(),
+            risk_threshold: 0.0,
+        }
+    }
+}
+
+/// A loaded knowledge base: the validated blob, its robot model and the code of each of its
+/// motion classes (looked up once by name).
+pub struct Runtime<'a> {
+    pub blob: Blob<'a>,
+    pub model: RobotModel,
+    pub config: RuntimeConfig,
+    classes: heapless::Vec<&'static dyn MotionClass, MAX_CLASSES>,
+}
+
+impl<'a> Runtime<'a> {
+    /// Validates header, version, CRC and every record, and indexes the sections in place.
+    pub fn load(bytes: &'a [u8]) -> Result<Self, LoadError> {
+        Self::load_with(bytes, RuntimeConfig::default())
+    }
+
+    /// [`Runtime::load`] with explicit settings.
+    pub fn load_with(bytes: &'a [u8], config: RuntimeConfig) -> Result<Self, LoadError> {
+        let blob = Blob::parse(bytes)?;
+        let model = blob.robot()?;
+        let n = blob.payload.classes.len();
+        let mut classes = heapless::Vec::new();
+        for i in 0..n {
+            // Blob::parse already checked every class name resolves.
+            let c = blob.class(i)?;
+            let code = motion::class(c.name).ok_or(BlobError::Reference {
+                section: prf_shared::blob::Section::Classes,
+                index: i,
+            })?;
+            classes
+                .push(code)
+                .map_err(|_| LoadError::TooManyClasses { count: n })?;
+        }
+        Ok(Runtime {
+            blob,
+            model,
+            config,
+            classes,
+        })
+    }
+
+    /// Number of motion classes in the blob.
+    pub fn class_count(&self) -> usize {
+        self.classes.len()
+    }
+
+    /// The code of blob class `i`.
+    pub fn class_code(&self, i: usize) -> Option<&'static dyn MotionClass> {
+        self.classes.get(i).copied()
+    }
+
+    /// Blob index of the class called `name`.
+    pub fn class_index(&self, name: &str) -> Option<usize> {
+        self.classes.iter().position(|c| c.name() == name)
+    }
+
+    /// Indices of the skills of blob class `class`, in blob order.
+    pub fn skills_of(&self, class: usize) -> impl Iterator<Item = usize> + '_ {
+        (0..self.blob.payload.skills.len())
+            .filter(move |&k| self.blob.skill(k).is_ok_and(|s| s.class as usize == class))
+    }
+
+    /// Workspace Ω+ of location type `t`, if one was learned.
+    pub fn workspace(&self, t: usize) -> Result<Option<Field<'a>>, LoadError> {
+        let l = self.blob.location_type(t)?;
+        match l.workspace {
+            Some(d) => Ok(Some(Field::new(&d).map_err(|error| BlobError::Field {
+                location_type: t,
+                error,
+            })?)),
+            None => Ok(None),
+        }
+    }
+
+    /// The working (f64) RDMP of skill `k`, if the skill has one.
+    pub fn skill_rdmp(&self, k: usize) -> Result<Option<Rdmp>, LoadError> {
+        match self.blob.skill(k)?.rdmp {
+            Some(r) => Ok(Some(self.blob.rdmp(r as usize)?)),
+            None => Ok(None),
+        }
+    }
+}

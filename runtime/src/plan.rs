@@ -1,0 +1,136 @@
+//! Program generation (Sec. 6): task validation, symbolic feasibility, task planning,
+//! SkillPlan-PTT, and the program the executor runs.
+
+use crate::load::{LoadError, Runtime};
+use crate::program::{Program, ProgramError, Realization};
+use crate::skill_plan::{PttClasses, PttSides, SkillPlan, SkillPlanError, plan_skills};
+use crate::task::{MissingList, Resolved, Task, TaskError};
+use crate::task_plan::{ActionPlan, plan_actions};
+use prf_shared::motion::Goal;
+use prf_shared::se3::Pose;
+
+/// A planned task.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    pub resolved: Resolved,
+    /// The action plan (Move, Pick, Move, Place, Move).
+    pub actions: ActionPlan,
+    /// The skill plan: choice, J*, feasibility, work counts.
+    pub skills: SkillPlan,
+    /// The program of the choice (also when J* exceeds the threshold, for inspection).
+    pub program: Option<Program>,
+    /// Platform poses (world) of the chosen stances at ℓ1 and ℓ2.
+    pub stances: Option<(Pose, Pose)>,
+    /// Arm bases of the chosen stances in the frames of ℓ1 and ℓ2 (where the risk is taken).
+    pub arm_bases: Option<(Pose, Pose)>,
+}
+
+/// Why no plan came out.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PlanError<'t> {
+    /// The task itself is malformed.
+    Task(TaskError),
+    /// Symbolically infeasible: the blob lacks what is listed.
+    Infeasible(MissingList<'t>),
+    /// The action templates cannot reach the goal state.
+    NoActionPlan,
+    Skill(SkillPlanError),
+    Program(ProgramError),
+    Load(LoadError),
+}
+
+impl From<LoadError> for PlanError<'_> {
+    fn from(e: LoadError) -> Self {
+        PlanError::Load(e)
+    }
+}
+
+impl From<SkillPlanError> for PlanError<'_> {
+    fn from(e: SkillPlanError) -> Self {
+        PlanError::Skill(e)
+    }
+}
+
+impl core::fmt::Display for PlanError<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            PlanError::Task(e) => write!(f, "bad task: {e}"),
+            PlanError::Infeasible(missing) => {
+                write!(f, "symbolically infeasible: missing ")?;
+                for (i, m) in missing.iter().enumerate() {
+                    if i > 0 {
+                        write!(f, ", ")?;
+                    }
+                    write!(f, "{m}")?;
+                }
+                Ok(())
+            }
+            PlanError::NoActionPlan => write!(f, "no action plan reaches the goal state"),
+            PlanError::Skill(e) => write!(f, "skill planning failed: {e:?}"),
+            PlanError::Program(e) => write!(f, "the chosen skills do not form a program: {e:?}"),
+            PlanError::Load(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// Plans `task`: validation, symbolic feasibility (Sec. 6.1), forward task planning,
+/// SkillPlan-PTT (Alg. 4), program.
+// Without a heap the list of missing items travels by value (about 200 bytes).
+#[allow(clippy::result_large_err)]
+pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>> {
+    task.validate().map_err(PlanError::Task)?;
+    let resolved = task.resolve(rt)?.map_err(PlanError::Infeasible)?;
+    let actions = plan_actions(rt)?.ok_or(PlanError::NoActionPlan)?;
+    let classes = PttClasses::of(rt).ok_or(PlanError::Skill(SkillPlanError::UnsupportedPlan))?;
+    if !classes.matches(&actions) {
+        return Err(PlanError::Skill(SkillPlanError::UnsupportedPlan));
+    }
+    let sides = PttSides::new(rt, task, &resolved, &classes)?;
+    let skills = plan_skills(rt, &sides)?;
+    let (mut program, mut stances, mut arm_bases) = (None, None, None);
+    if let Some(c) = skills.choice {
+        let (s1, s2, g) = (
+            c.stance_from as usize,
+            c.stance_to as usize,
+            c.grasp as usize,
+        );
+        let missing = SkillPlanError::UnsupportedPlan;
+        let p1 = *sides.pick.platform.get(s1).ok_or(missing)?;
+        let p2 = *sides.place.platform.get(s2).ok_or(missing)?;
+        let pick_goal = *sides.pick.goal(s1, g).ok_or(missing)?;
+        let place_goal = *sides.place.goal(s2, g).ok_or(missing)?;
+        let realized = [
+            Realization {
+                goal: Goal::Base(p1),
+                skill: None,
+            },
+            Realization {
+                goal: Goal::Tcp(pick_goal),
+                skill: Some(c.pick_skill),
+            },
+            Realization {
+                goal: Goal::Base(p2),
+                skill: None,
+            },
+            Realization {
+                goal: Goal::Tcp(place_goal),
+                skill: Some(c.place_skill),
+            },
+            Realization {
+                goal: Goal::Base(task.home),
+                skill: None,
+            },
+        ];
+        program = Some(Program::new(rt, &actions, &realized).map_err(PlanError::Program)?);
+        stances = Some((p1, p2));
+        arm_bases = Some((sides.pick.arm_bases[s1], sides.place.arm_bases[s2]));
+    }
+    Ok(Plan {
+        resolved,
+        actions,
+        skills,
+        program,
+        stances,
+        arm_bases,
+    })
+}

@@ -1,0 +1,111 @@
+//! A planned program: the concatenation of the skills of a skill plan (Sec. 6.1,
+//! q(t) = ∪ κ_i(y_i0, g_i)), as the segments the executor runs. Each action contributes its
+//! class's generator sequence π (Sec. 5.3.1).
+
+use crate::load::{LoadError, Runtime};
+use crate::reverse::{MAX_STEPS, ReverseError};
+use crate::task_plan::ActionPlan;
+use prf_shared::motion::{Generator, Goal};
+use prf_shared::se3::Pose;
+
+/// Maximum segments of a program.
+pub const MAX_SEGMENTS: usize = 24;
+
+/// One executor segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Segment {
+    /// π_BaseMove: the platform drives itself to `goal` (world); the arm holds.
+    Base { goal: Pose },
+    /// π_ArmRDMP: skill `skill`'s RDMP from the current arm configuration to `goal` (arm base
+    /// frame), `steps` ticks.
+    Arm { skill: u16, goal: Pose, steps: u32 },
+    /// π_Grip: command the gripper and wait for it.
+    Grip { close: bool },
+    /// ¬π_ArmRDMP: the preceding Arm segment backwards.
+    Reverse { steps: u32 },
+}
+
+/// The parameters an action was realized with: its goal and, for RDMP generators, its skill.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Realization {
+    pub goal: Goal,
+    pub skill: Option<u16>,
+}
+
+/// Why a skill plan cannot be turned into a program.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ProgramError {
+    Load(LoadError),
+    /// Action `action` lacks the goal kind or skill its generators need.
+    Realization {
+        action: usize,
+    },
+    /// An arm motion is too long to be played backwards.
+    Reverse(ReverseError),
+    /// More segments than [`MAX_SEGMENTS`].
+    TooLong,
+}
+
+impl From<LoadError> for ProgramError {
+    fn from(e: LoadError) -> Self {
+        ProgramError::Load(e)
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Program {
+    pub segments: heapless::Vec<Segment, MAX_SEGMENTS>,
+}
+
+impl Program {
+    /// Chains the generators of each action with its realization.
+    pub fn new(
+        rt: &Runtime<'_>,
+        actions: &ActionPlan,
+        realized: &[Realization],
+    ) -> Result<Self, ProgramError> {
+        let mut segments = heapless::Vec::new();
+        for (i, a) in actions.iter().enumerate() {
+            let bad = ProgramError::Realization { action: i };
+            let class = rt.class_code(a.class as usize).ok_or(bad)?;
+            let r = realized.get(i).ok_or(bad)?;
+            let mut arm_steps = 0u32;
+            for g in class.generators() {
+                let seg = match (g, r.goal, r.skill) {
+                    (Generator::BaseMove, Goal::Base(goal), _) => Segment::Base { goal },
+                    (Generator::ArmRdmp, Goal::Tcp(goal), Some(skill)) => {
+                        let rdmp = rt.skill_rdmp(skill as usize)?.ok_or(bad)?;
+                        let steps = libm::round(rdmp.duration() / rt.config.rdmp.dt) as usize;
+                        if steps > MAX_STEPS {
+                            return Err(ProgramError::Reverse(ReverseError::TooLong { steps }));
+                        }
+                        arm_steps = steps as u32;
+                        Segment::Arm {
+                            skill,
+                            goal,
+                            steps: arm_steps,
+                        }
+                    }
+                    (Generator::ArmRdmpReversed, Goal::Tcp(_), Some(_)) => {
+                        Segment::Reverse { steps: arm_steps }
+                    }
+                    (Generator::Grip { close }, _, _) => Segment::Grip { close: *close },
+                    _ => return Err(bad),
+                };
+                segments.push(seg).map_err(|_| ProgramError::TooLong)?;
+            }
+        }
+        Ok(Program { segments })
+    }
+
+    /// Ticks the arm segments take (the rest waits on the platform and the gripper).
+    pub fn arm_ticks(&self) -> u64 {
+        self.segments
+            .iter()
+            .map(|s| match s {
+                Segment::Arm { steps, .. } | Segment::Reverse { steps } => *steps as u64,
+                _ => 0,
+            })
+            .sum()
+    }
+}

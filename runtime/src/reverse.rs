@@ -1,0 +1,149 @@
+//! ¬π_ArmRDMP: playing a forward RDMP motion backwards, exactly, without a buffer of the
+//! whole motion.
+//!
+//! The forward motion q_0 … q_n is cut into blocks of [`BLOCK`] steps aligned to its end:
+//! [n−B, n), [n−2B, n−B), …, [0, …). While it runs forward, the runtime keeps the last
+//! block's configurations and an [`RdmpCheckpoint`] at the start of every other block.
+//! Backwards, it plays one block from a buffer while it re-integrates the previous block from
+//! its checkpoint into a second buffer, one RDMP step per tick. Re-integration from a
+//! checkpoint is bit-identical, so the reversed motion visits exactly the forward
+//! configurations (and therefore has exactly the planned risk). RAM: two blocks of
+//! configurations and the checkpoints, independent of the per-tick work (one step).
+
+use prf_shared::rdmp::{Rdmp, RdmpCheckpoint, RdmpConfig, RdmpError, RdmpRun};
+use prf_shared::robot::RobotModel;
+use prf_shared::{JointVector, NA};
+
+/// Steps per block.
+pub const BLOCK: usize = 256;
+/// Checkpoints kept (blocks before the last).
+pub const MAX_CHECKPOINTS: usize = 40;
+/// The longest motion that can be reversed, steps (41 × 256 = 10.5 s at 1 kHz).
+pub const MAX_STEPS: usize = BLOCK * (MAX_CHECKPOINTS + 1);
+
+/// Recording of a forward motion and its backward playback.
+pub struct Reversal {
+    /// Steps n of the forward motion.
+    n: usize,
+    checkpoints: heapless::Vec<RdmpCheckpoint, MAX_CHECKPOINTS>,
+    buffers: [[[f64; NA]; BLOCK]; 2],
+    /// Backward tick i (emits q_{n−1−i}).
+    i: usize,
+    /// Re-integration of the block after the one playing.
+    refill: Option<(RdmpRun, usize)>,
+}
+
+impl Reversal {
+    pub const fn new() -> Self {
+        Reversal {
+            n: 0,
+            checkpoints: heapless::Vec::new(),
+            buffers: [[[0.0; NA]; BLOCK]; 2],
+            i: 0,
+            refill: None,
+        }
+    }
+
+    /// Start of block j (block 0 ends at n).
+    fn block_start(&self, j: usize) -> usize {
+        self.n.saturating_sub((j + 1) * BLOCK)
+    }
+
+    /// Number of blocks.
+    fn blocks(&self) -> usize {
+        self.n.div_ceil(BLOCK)
+    }
+
+    /// Begins recording a forward motion of `n` steps. Errors if it is longer than
+    /// [`MAX_STEPS`].
+    pub fn begin(&mut self, n: usize) -> Result<(), ReverseError> {
+        if n > MAX_STEPS {
+            return Err(ReverseError::TooLong { steps: n });
+        }
+        self.n = n;
+        self.checkpoints.clear();
+        self.i = 0;
+        self.refill = None;
+        Ok(())
+    }
+
+    /// Records the forward run at step k (before it steps from q_k).
+    pub fn record(&mut self, run: &RdmpRun) {
+        let k = run.progress().0;
+        let last = self.block_start(0);
+        if k >= last {
+            if let Some(slot) = self.buffers[0].get_mut(k - last) {
+                *slot = (*run.q()).into();
+            }
+        } else if k == 0 || (self.n - k).is_multiple_of(BLOCK) {
+            // Blocks before the last one: at most MAX_CHECKPOINTS (checked by `begin`).
+            let _ = self.checkpoints.push(run.checkpoint());
+        }
+    }
+
+    /// True once q_0 was played.
+    pub fn finished(&self) -> bool {
+        self.i >= self.n
+    }
+
+    /// The next configuration backwards (q_{n−1}, …, q_0), with at most one RDMP step of
+    /// re-integration.
+    pub fn next(
+        &mut self,
+        model: &RobotModel,
+        rdmp: &Rdmp,
+        cfg: &RdmpConfig,
+    ) -> Result<Option<JointVector>, ReverseError> {
+        if self.finished() {
+            return Ok(None);
+        }
+        let j = self.i / BLOCK;
+        let start = self.block_start(j);
+        let q = self.buffers[j % 2][self.n - 1 - self.i - start];
+        if self.i.is_multiple_of(BLOCK) && j + 1 < self.blocks() {
+            // Checkpoints are in time order: block j+1 starts at checkpoint J − (j+1).
+            let c = self
+                .checkpoints
+                .len()
+                .checked_sub(j + 1)
+                .and_then(|c| self.checkpoints.get(c))
+                .ok_or(ReverseError::MissingCheckpoint)?;
+            self.refill = Some((RdmpRun::resume(rdmp, cfg, c)?, 0));
+        }
+        let len = start - self.block_start(j + 1);
+        if let Some((run, pos)) = &mut self.refill
+            && *pos < len
+        {
+            self.buffers[(j + 1) % 2][*pos] = (*run.q()).into();
+            *pos += 1;
+            if *pos < len {
+                run.step(model, rdmp, cfg)?;
+            }
+        }
+        self.i += 1;
+        Ok(Some(JointVector::from(q)))
+    }
+}
+
+impl Default for Reversal {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Why a motion cannot be played backwards.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ReverseError {
+    /// The forward motion is longer than [`MAX_STEPS`].
+    TooLong { steps: usize },
+    /// The forward motion was not recorded from its start.
+    MissingCheckpoint,
+    /// Re-integration failed (it cannot, for a motion that ran forward).
+    Rdmp(RdmpError),
+}
+
+impl From<RdmpError> for ReverseError {
+    fn from(e: RdmpError) -> Self {
+        ReverseError::Rdmp(e)
+    }
+}

@@ -1,0 +1,510 @@
+//! SkillPlan-PTT (Alg. 4), decomposed and pruned.
+//!
+//! The paper's grid evaluates J = max(r_Pick, r_Place) over stances(ℓ1) × stances(ℓ2) ×
+//! grasps × K_Pick × K_Place. r_Pick depends only on (stance 1, grasp, pick skill) and r_Place
+//! only on (stance 2, grasp, place skill), so per grasp the optimum is the maximum of two
+//! independent minima: a sum of work instead of a product. Two prunings keep the optimum:
+//! - an integration stops as soon as its running risk reaches the side's best so far or the
+//!   best J of an earlier grasp (risk only grows along a trajectory, so it cannot win);
+//! - a side stops at risk 0, and the search stops at J = 0.
+//!
+//! **Order and ties.** Candidates of a side are ordered stance-major (blob order of the
+//! stances), then by skill rank: skills learned at this location type with this part type
+//! first, then at this location type, then the rest, each group in blob order. Of the plans
+//! with the least J the one chosen minimises, in this order, the grasp index, r_Pick, the pick
+//! candidate's position, r_Place, the place candidate's position. (Among equally risky plans
+//! the safest pick and place are preferred.) The brute-force test sorts the full grid by this
+//! key.
+//!
+//! The risk is that of exactly the trajectory the executor will run: the RDMP integrated from
+//! q_a,H with the executor's step Δt, at every configuration including q_a,H (the reversed
+//! motion and the gripper wait revisit the same configurations).
+
+use crate::load::{LoadError, Runtime};
+use crate::task::{Resolved, Task};
+use crate::task_plan::{Action, ActionPlan, FROM, HOME, TO};
+use prf_shared::field::Field;
+use prf_shared::kinematics::ArmKinematics;
+use prf_shared::motion::{Goal, GoalContext, MotionClass, PhysicalState};
+use prf_shared::rdmp::{Rdmp, RdmpError, RdmpRun};
+use prf_shared::risk::RiskAccumulator;
+use prf_shared::se3::{Pose, pose_from_array};
+use prf_shared::{JointVector, blob::MAX_AFFORDANCES};
+
+/// The classes a part-transportation plan uses.
+pub const PTT_CLASSES: [&str; 3] = ["Pick", "Place", "Move"];
+/// Maximum skills of one class the planner orders.
+pub const MAX_SKILLS: usize = 512;
+/// Maximum (stance, grasp) goals of one side.
+pub const MAX_GOALS: usize = 64;
+
+/// The decision variables of SkillPlan-PTT: indices of stance at ℓ1, stance at ℓ2 and grasp
+/// in the blob's affordance lists, and the blob indices of the pick and place skills.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Choice {
+    pub stance_from: u8,
+    pub stance_to: u8,
+    pub grasp: u8,
+    pub pick_skill: u16,
+    pub place_skill: u16,
+}
+
+/// Counts of the work done.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PlanStats {
+    /// RDMP integrations started.
+    pub integrations: u32,
+    /// ... of which stopped early by the bound.
+    pub pruned: u32,
+    /// ... of which failed (singular, joint limit, non-finite).
+    pub failed: u32,
+    /// Integration steps taken in total.
+    pub steps: u64,
+    /// Integrations the paper's full grid would run (2 per grid point).
+    pub grid_integrations: u64,
+}
+
+/// The result of SkillPlan-PTT.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SkillPlan {
+    /// The optimum; `None` when no candidate integrates at all.
+    pub choice: Option<Choice>,
+    /// J* = max(r_Pick, r_Place) of the choice (∞ without a choice), m.
+    pub j: f64,
+    pub r_pick: f64,
+    pub r_place: f64,
+    /// J* ≤ the configured risk threshold.
+    pub feasible: bool,
+    pub stats: PlanStats,
+}
+
+/// What an arm motion candidate came to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Evaluation {
+    /// Fully integrated: its risk (Eq. 16) and number of steps.
+    Risk { risk: f64, steps: usize },
+    /// Stopped after `steps` because its running risk reached the bound.
+    Pruned { steps: usize },
+    /// The RDMP could not be integrated.
+    Failed(RdmpError),
+}
+
+/// Why planning stopped with an error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SkillPlanError {
+    Load(LoadError),
+    /// The action plan is not Move, Pick, Move, Place, Move.
+    UnsupportedPlan,
+    /// More skills in one class than [`MAX_SKILLS`].
+    TooManySkills,
+    /// More stances × grasps than [`MAX_GOALS`].
+    TooManyAffordances,
+}
+
+impl From<LoadError> for SkillPlanError {
+    fn from(e: LoadError) -> Self {
+        SkillPlanError::Load(e)
+    }
+}
+
+impl From<prf_shared::blob::BlobError> for SkillPlanError {
+    fn from(e: prf_shared::blob::BlobError) -> Self {
+        SkillPlanError::Load(e.into())
+    }
+}
+
+/// Integrates `rdmp` from q_a,H to `goal` (arm base frame) with the runtime's step, and
+/// accumulates the risk in `field` with the arm base at `arm_base` (field frame). Stops
+/// with [`Evaluation::Pruned`] once the running risk reaches `bound` (∞: never).
+/// `visit` sees every configuration, q_a,H first.
+pub fn evaluate_arm_motion(
+    rt: &Runtime<'_>,
+    rdmp: &Rdmp,
+    goal: &Pose,
+    field: &Field<'_>,
+    arm_base: &Pose,
+    bound: f64,
+    mut visit: impl FnMut(&JointVector),
+) -> Evaluation {
+    let (model, cfg) = (&rt.model, &rt.config.rdmp);
+    let q0 = JointVector::from(model.home);
+    let mut run = match RdmpRun::new(model, rdmp, &q0, goal, cfg) {
+        Ok(r) => r,
+        Err(e) => return Evaluation::Failed(e),
+    };
+    let mut acc = RiskAccumulator::default();
+    let mut steps = 0;
+    let mut q = q0;
+    // Each step shows the FK of the configuration it leaves: q_0 … q_{n−1}; q_n is added last.
+    while !run.finished() {
+        visit(&q);
+        let mut risk = 0.0;
+        let step = run.step_observed(model, rdmp, cfg, |kin| {
+            risk = acc.add(model, field, arm_base, kin);
+        });
+        if risk >= bound {
+            return Evaluation::Pruned { steps };
+        }
+        match step {
+            Ok(s) => q = s.q,
+            Err(e) => return Evaluation::Failed(e),
+        }
+        steps += 1;
+    }
+    visit(&q);
+    if acc.add(model, field, arm_base, &ArmKinematics::new(model, &q)) >= bound {
+        return Evaluation::Pruned { steps };
+    }
+    Evaluation::Risk {
+        risk: acc.risk(),
+        steps,
+    }
+}
+
+/// One side of the search (Pick at ℓ1 or Place at ℓ2): its workspace, the arm base of each
+/// stance in the location frame, the arm-base-frame goal of each (stance, grasp), and the
+/// ordered skills.
+pub struct Side<'a> {
+    pub field: Field<'a>,
+    pub arm_bases: heapless::Vec<Pose, MAX_AFFORDANCES>,
+    /// Goal of (stance s, grasp g) at s · grasps + g.
+    pub goals: heapless::Vec<Pose, MAX_GOALS>,
+    pub grasps: usize,
+    /// World pose of the platform at each stance (the Move goal).
+    pub platform: heapless::Vec<Pose, MAX_AFFORDANCES>,
+    pub skills: heapless::Vec<u16, MAX_SKILLS>,
+}
+
+impl<'a> Side<'a> {
+    fn new(
+        rt: &Runtime<'a>,
+        location_type: usize,
+        grasps: usize,
+        skills: heapless::Vec<u16, MAX_SKILLS>,
+    ) -> Result<Self, SkillPlanError> {
+        Ok(Side {
+            // Symbolic feasibility checked the workspace exists.
+            field: rt
+                .workspace(location_type)?
+                .ok_or(SkillPlanError::UnsupportedPlan)?,
+            arm_bases: heapless::Vec::new(),
+            goals: heapless::Vec::new(),
+            grasps,
+            platform: heapless::Vec::new(),
+            skills,
+        })
+    }
+
+    /// Adds a stance: the platform at `platform` (world) next to a location at `location`,
+    /// with room for its goals.
+    fn add_stance(
+        &mut self,
+        location: Pose,
+        platform: Pose,
+        model: &prf_shared::robot::RobotModel,
+    ) -> Result<(), SkillPlanError> {
+        // At most MAX_AFFORDANCES stances come from the blob.
+        let _ = self.platform.push(platform);
+        let _ = self
+            .arm_bases
+            .push(location.inverse() * platform * model.mount);
+        for _ in 0..self.grasps {
+            self.goals
+                .push(Pose::identity())
+                .map_err(|_| SkillPlanError::TooManyAffordances)?;
+        }
+        Ok(())
+    }
+
+    /// The goal of stance `s` and grasp `g`.
+    pub fn goal(&self, s: usize, g: usize) -> Option<&Pose> {
+        self.goals
+            .get(s * self.grasps + g)
+            .filter(|_| g < self.grasps)
+    }
+
+    /// Candidates of the side in their documented order: (stance, skill).
+    pub fn candidates(&self) -> impl Iterator<Item = (u8, u16)> + '_ {
+        (0..self.arm_bases.len()).flat_map(move |s| self.skills.iter().map(move |&k| (s as u8, k)))
+    }
+}
+
+/// The blob's stances T_b^ℓ of location type `t`.
+fn stances(
+    rt: &Runtime<'_>,
+    t: usize,
+) -> Result<heapless::Vec<Pose, MAX_AFFORDANCES>, SkillPlanError> {
+    let mut out = heapless::Vec::new();
+    for s in rt.blob.location_type(t)?.stances.iter() {
+        // Blob::parse checked every stance is a finite unit-quaternion pose.
+        let s =
+            pose_from_array(*s).ok_or(LoadError::Blob(prf_shared::blob::BlobError::Reference {
+                section: prf_shared::blob::Section::LocationTypes,
+                index: t,
+            }))?;
+        let _ = out.push(s);
+    }
+    Ok(out)
+}
+
+/// Skills of class `class`, ranked for location type `t` and part type `p` (module docs).
+fn ranked_skills(
+    rt: &Runtime<'_>,
+    class: usize,
+    t: usize,
+    p: usize,
+) -> Result<heapless::Vec<u16, MAX_SKILLS>, SkillPlanError> {
+    let mut out = heapless::Vec::new();
+    for rank in 0..3 {
+        for k in rt.skills_of(class) {
+            let s = rt.blob.skill(k)?;
+            let here = s.location_type == Some(t as u8);
+            let r = match (here, s.part_type == Some(p as u8)) {
+                (true, true) => 0,
+                (true, false) => 1,
+                _ => 2,
+            };
+            if r == rank && s.rdmp.is_some() {
+                out.push(k as u16)
+                    .map_err(|_| SkillPlanError::TooManySkills)?;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The blob class indices of Pick, Place and Move and their code.
+pub struct PttClasses {
+    pub pick: (usize, &'static dyn MotionClass),
+    pub place: (usize, &'static dyn MotionClass),
+    pub moves: (usize, &'static dyn MotionClass),
+}
+
+impl PttClasses {
+    pub fn of(rt: &Runtime<'_>) -> Option<Self> {
+        let get = |name| {
+            let i = rt.class_index(name)?;
+            Some((i, rt.class_code(i)?))
+        };
+        Some(PttClasses {
+            pick: get("Pick")?,
+            place: get("Place")?,
+            moves: get("Move")?,
+        })
+    }
+
+    /// Whether `plan` is Move(ℓ0, ℓ1), Pick(p, ℓ1), Move(ℓ1, ℓ2), Place(p, ℓ2), Move(ℓ2, ℓ0).
+    pub fn matches(&self, plan: &ActionPlan) -> bool {
+        let a = |class: usize, args: &[u8]| Action {
+            class: class as u8,
+            args: [args[0], args[1], 0],
+            n_args: 2,
+        };
+        let expected = [
+            a(self.moves.0, &[HOME, FROM]),
+            a(self.pick.0, &[0, FROM]),
+            a(self.moves.0, &[FROM, TO]),
+            a(self.place.0, &[0, TO]),
+            a(self.moves.0, &[TO, HOME]),
+        ];
+        plan.as_slice() == expected
+    }
+}
+
+/// GoalContext of an action at `location` with the given affordances.
+fn context<'c>(
+    model: &'c prf_shared::robot::RobotModel,
+    task: &Task<'_>,
+    location: Pose,
+    stances: &'c [Pose],
+    grasps: &'c [Pose],
+) -> GoalContext<'c> {
+    GoalContext {
+        model,
+        part_goal: task.goal,
+        location,
+        stances,
+        grasps,
+    }
+}
+
+/// The two sides of a PTT plan, with goals from the classes' Y, G and Φ_x.
+pub struct PttSides<'a> {
+    pub pick: Side<'a>,
+    pub place: Side<'a>,
+    pub grasps: usize,
+}
+
+impl<'a> PttSides<'a> {
+    pub fn new(
+        rt: &Runtime<'a>,
+        task: &Task<'_>,
+        r: &Resolved,
+        c: &PttClasses,
+    ) -> Result<Self, SkillPlanError> {
+        let model = &rt.model;
+        let mut grasps: heapless::Vec<Pose, MAX_AFFORDANCES> = heapless::Vec::new();
+        for g in rt.blob.part_type(r.part_type)?.grasps.iter() {
+            // Blob::parse checked every grasp is a finite unit-quaternion pose.
+            if let Some(g) = pose_from_array(*g) {
+                let _ = grasps.push(g);
+            }
+        }
+        let from = stances(rt, r.from_type)?;
+        let to = stances(rt, r.to_type)?;
+        let start = PhysicalState {
+            base: task.home,
+            arm: JointVector::from(model.home),
+            gripper: 0.0,
+            part: task.part.pose,
+        };
+        let n = grasps.len();
+        let mut pick = Side::new(
+            rt,
+            r.from_type,
+            n,
+            ranked_skills(rt, c.pick.0, r.from_type, r.part_type)?,
+        )?;
+        let mut place = Side::new(
+            rt,
+            r.to_type,
+            n,
+            ranked_skills(rt, c.place.0, r.to_type, r.part_type)?,
+        )?;
+        let (mv, pk, pl) = (c.moves.1, c.pick.1, c.place.1);
+        let mut result = Ok(());
+        // Move(ℓ0, ℓ1) to each stance; Pick's goals there, one per grasp (Alg. 4 line 7).
+        let at_from = context(model, task, task.from.pose, &from, &grasps);
+        let mut after_pick: heapless::Vec<PhysicalState, MAX_AFFORDANCES> = heapless::Vec::new();
+        mv.goals(&start, &at_from, &mut |stance| {
+            let x = mv.transition(model, &start, &stance);
+            let s = pick.arm_bases.len();
+            result = result.and(pick.add_stance(task.from.pose, x.base, model));
+            let mut g = 0;
+            pk.goals(&x, &at_from, &mut |goal| {
+                if let (Goal::Tcp(p), Some(slot)) = (goal, pick.goals.get_mut(s * n + g)) {
+                    *slot = p;
+                }
+                // The state after Pick and its effect on Place depend on the grasp only
+                // (Alg. 4 line 8): take it at the first stance.
+                if s == 0 {
+                    let _ = after_pick.push(pk.transition(model, &x, &goal));
+                }
+                g += 1;
+            });
+        });
+        // Move(ℓ1, ℓ2) to each stance; Place's goal there for each grasp.
+        let at_to = context(model, task, task.to.pose, &to, &grasps);
+        for (g, held) in after_pick.iter().enumerate() {
+            let mut s = 0;
+            mv.goals(held, &at_to, &mut |stance| {
+                let x = mv.transition(model, held, &stance);
+                if g == 0 {
+                    result = result.and(place.add_stance(task.to.pose, x.base, model));
+                }
+                pl.goals(&x, &at_to, &mut |goal| {
+                    if let (Goal::Tcp(p), Some(slot)) = (goal, place.goals.get_mut(s * n + g)) {
+                        *slot = p;
+                    }
+                });
+                s += 1;
+            });
+        }
+        result?;
+        Ok(PttSides {
+            pick,
+            place,
+            grasps: grasps.len(),
+        })
+    }
+}
+
+/// The best candidate of one side found so far: (risk, stance, skill).
+type Best = Option<(f64, u8, u16)>;
+
+/// min over the side's candidates of r for grasp `grasp`, counting only candidates with
+/// r < `bound`; the first candidate in order wins ties.
+fn side_minimum(
+    rt: &Runtime<'_>,
+    side: &Side<'_>,
+    grasp: usize,
+    bound: f64,
+    stats: &mut PlanStats,
+) -> Result<Best, SkillPlanError> {
+    let mut best: Best = None;
+    for (s, k) in side.candidates() {
+        let limit = best.map_or(bound, |b| b.0.min(bound));
+        let Some(goal) = side.goal(s as usize, grasp) else {
+            continue;
+        };
+        let Some(rdmp) = rt.skill_rdmp(k as usize)? else {
+            continue;
+        };
+        let arm_base = &side.arm_bases[s as usize];
+        stats.integrations += 1;
+        match evaluate_arm_motion(rt, &rdmp, goal, &side.field, arm_base, limit, |_| {}) {
+            Evaluation::Risk { risk, steps } => {
+                stats.steps += steps as u64;
+                if risk < limit {
+                    best = Some((risk, s, k));
+                    if risk <= 0.0 {
+                        break;
+                    }
+                }
+            }
+            Evaluation::Pruned { steps } => {
+                stats.pruned += 1;
+                stats.steps += steps as u64;
+            }
+            Evaluation::Failed(_) => stats.failed += 1,
+        }
+    }
+    Ok(best)
+}
+
+/// SkillPlan-PTT (Alg. 4) over the two sides: the decomposed, pruned grid search.
+pub fn plan_skills(rt: &Runtime<'_>, sides: &PttSides<'_>) -> Result<SkillPlan, SkillPlanError> {
+    let (pick, place) = (&sides.pick, &sides.place);
+    let mut stats = PlanStats {
+        grid_integrations: 2
+            * (pick.arm_bases.len() * place.arm_bases.len() * sides.grasps) as u64
+            * (pick.skills.len() * place.skills.len()) as u64,
+        ..PlanStats::default()
+    };
+    let mut best: Option<(f64, Choice, f64, f64)> = None;
+    for g in 0..sides.grasps {
+        let bound = best.map_or(f64::INFINITY, |b| b.0);
+        let Some((r_pick, s1, k1)) = side_minimum(rt, pick, g, bound, &mut stats)? else {
+            continue;
+        };
+        let Some((r_place, s2, k2)) = side_minimum(rt, place, g, bound, &mut stats)? else {
+            continue;
+        };
+        let j = r_pick.max(r_place);
+        if j < bound {
+            let choice = Choice {
+                stance_from: s1,
+                stance_to: s2,
+                grasp: g as u8,
+                pick_skill: k1,
+                place_skill: k2,
+            };
+            best = Some((j, choice, r_pick, r_place));
+            if j <= 0.0 {
+                break;
+            }
+        }
+    }
+    let (j, choice, r_pick, r_place) = match best {
+        Some((j, c, a, b)) => (j, Some(c), a, b),
+        None => (f64::INFINITY, None, f64::INFINITY, f64::INFINITY),
+    };
+    Ok(SkillPlan {
+        choice,
+        j,
+        r_pick,
+        r_place,
+        feasible: j <= rt.config.risk_threshold,
+        stats,
+    })
+}
