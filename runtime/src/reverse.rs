@@ -147,3 +147,69 @@ impl From<RdmpError> for ReverseError {
         ReverseError::Rdmp(e)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use prf_shared::dmp::DmpParams;
+    use prf_shared::kinematics::ArmKinematics;
+    use prf_shared::rdmp::null_space_coordinate;
+    use std::vec::Vec;
+
+    /// An RDMP of `n` steps at 1 ms, trained on a smooth joint motion away from home.
+    fn rdmp(model: &RobotModel, n: usize) -> Rdmp {
+        let home = model.home;
+        let q: Vec<[f64; NA]> = (0..=n)
+            .map(|k| {
+                let s = k as f64 / n as f64;
+                let s = s * s * (3.0 - 2.0 * s);
+                core::array::from_fn(|i| home[i] + s * [0.3, 0.2, -0.2, 0.25, 0.1, -0.2, 0.3][i])
+            })
+            .collect();
+        let mut gamma = std::vec![0.0; q.len()];
+        null_space_coordinate(model, &q, 0.01, &mut gamma).expect("gamma");
+        Rdmp::train(model, &q, &gamma, 1e-3, &DmpParams::default()).expect("train")
+    }
+
+    #[test]
+    fn the_reversal_replays_the_forward_motion_exactly() {
+        let model = RobotModel::kmr_iiwa14();
+        let cfg = RdmpConfig::default();
+        let mut rev = std::boxed::Box::new(Reversal::new());
+        // Shorter than a block, one block, a block and a bit, several blocks.
+        for n in [40, BLOCK, BLOCK + 1, 3 * BLOCK + 77] {
+            let r = rdmp(&model, n);
+            let q0 = JointVector::from(model.home);
+            let goal = ArmKinematics::new(
+                &model,
+                &JointVector::from(core::array::from_fn(|i| {
+                    model.home[i] + [0.2, 0.1, -0.1, 0.2, 0.1, -0.1, 0.2][i]
+                })),
+            )
+            .tcp;
+            let mut run = RdmpRun::new(&model, &r, &q0, &goal, &cfg).expect("run");
+            let steps = run.progress().1;
+            assert_eq!(steps, n);
+            rev.begin(steps).expect("fits");
+            let mut forward = std::vec![q0];
+            while !run.finished() {
+                rev.record(&run);
+                forward.push(run.step(&model, &r, &cfg).expect("step").q);
+            }
+            let mut backward = Vec::new();
+            while let Some(q) = rev.next(&model, &r, &cfg).expect("reverse") {
+                backward.push(q);
+            }
+            forward.pop();
+            forward.reverse();
+            assert_eq!(backward, forward, "n = {n}: bit-identical reversal");
+        }
+        assert_eq!(
+            rev.begin(MAX_STEPS + 1),
+            Err(ReverseError::TooLong {
+                steps: MAX_STEPS + 1
+            })
+        );
+    }
+}

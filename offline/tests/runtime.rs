@@ -1,0 +1,442 @@
+//! The no_std runtime on the example cell: feasibility with all and with two demonstrations,
+//! soundness against the ground-truth cell, SkillPlan-PTT against a brute-force grid, the
+//! executor against the planner, and bad input.
+
+use indicatif::ProgressBar;
+use prf_offline::compile::compile;
+use prf_offline::demogen::generate_dataset;
+use prf_offline::execute::{Execution, execute};
+use prf_offline::learn::{LearnConfig, learn};
+use prf_offline::tasks::{FloorTask, world_tasks};
+use prf_offline::world::World;
+use prf_offline::world::geometry::Cell;
+use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode};
+use prf_runtime::plan::{PlanError, plan};
+use prf_runtime::program::Segment;
+use prf_runtime::reverse::Reversal;
+use prf_runtime::skill_plan::{Evaluation, PttClasses, PttSides, evaluate_arm_motion};
+use prf_runtime::task::{Missing, TaskError};
+use prf_runtime::{LoadError, Runtime};
+use prf_shared::JointVector;
+use prf_shared::kinematics::ArmKinematics;
+use prf_shared::rdmp::integrate;
+use prf_shared::risk::RiskAccumulator;
+use prf_shared::robot::RobotModel;
+use std::sync::OnceLock;
+
+/// A blob learned from the example cell's afforded tasks selected by `keep`.
+/// `keep(part, from type, to type, (approach at from, approach at to, grasp))`.
+fn blob_of(
+    world: &World,
+    keep: impl Fn(&str, &str, &str, (usize, usize, usize)) -> bool,
+) -> Vec<u8> {
+    let model = RobotModel::kmr_iiwa14();
+    let chosen: Vec<_> = world
+        .afforded_tasks()
+        .into_iter()
+        .filter(|a| {
+            let t = &a.task;
+            keep(
+                &world.parts[t.part].id,
+                &world.locations[t.from].kind,
+                &world.locations[t.to].kind,
+                (a.approach_from, a.approach_to, a.grasp),
+            )
+        })
+        .collect();
+    let ds = generate_dataset(world, &chosen, 1, 100.0, &ProgressBar::hidden()).expect("gen");
+    let k = learn(&ds, &model, &LearnConfig::default(), &ProgressBar::hidden()).expect("learn");
+    compile(&k).expect("compile")
+}
+
+/// The blob of all 64 demonstrations (once).
+fn full_blob() -> &'static [u8] {
+    static B: OnceLock<Vec<u8>> = OnceLock::new();
+    B.get_or_init(|| blob_of(&World::example(), |_, _, _, _| true))
+}
+
+/// Two demonstrations, the first afforded task (first approaches, first grasp) of each of
+/// (part, from type, to type).
+fn two_demo_blob(a: (&str, &str, &str), b: (&str, &str, &str)) -> Vec<u8> {
+    blob_of(&World::example(), |p, f, t, variant| {
+        variant == (0, 0, 0) && ((p, f, t) == a || (p, f, t) == b)
+    })
+}
+
+/// Every configuration of the arm segments of an execution, with the segment index.
+fn arm_setpoints(run: &Execution, segment: usize) -> Vec<[f64; 7]> {
+    run.setpoints
+        .iter()
+        .filter(|s| s.mode == Mode::Arm && s.segment as usize == segment)
+        .map(|s| s.arm)
+        .collect()
+}
+
+#[test]
+fn all_64_demonstrations_make_all_18_tasks_feasible_and_risk_0_programs_are_sound() {
+    let world = World::example();
+    let rt = Runtime::load(full_blob()).expect("load");
+    let cell = Cell::new(&world, &rt.model);
+    let r = world.clearance.acceptable;
+    let tasks = world_tasks(&world);
+    assert_eq!(tasks.len(), 18);
+    let mut worst = f64::INFINITY;
+    for ft in &tasks {
+        let p = plan(&rt, &ft.task()).unwrap_or_else(|e| panic!("{}: {e}", ft.label()));
+        assert_eq!(p.actions.len(), 5, "{}", ft.label());
+        assert!(p.skills.feasible, "{}: J* = {}", ft.label(), p.skills.j);
+        assert_eq!(p.skills.j, 0.0, "{}", ft.label());
+        // Soundness: the executed program keeps clearance ≥ r from the true boxes (and floor)
+        // at every tick of every arm motion, with the platform at the chosen stances.
+        let program = p.program.as_ref().expect("program");
+        let run = execute(&rt, program, &ft.home, ExecutorConfig::default(), 200_000);
+        assert!(run.fault.is_none(), "{}: {:?}", ft.label(), run.fault);
+        assert_eq!(run.setpoints.last().map(|s| s.mode), Some(Mode::Done));
+        let (s1, s2) = p.stances.expect("stances");
+        for (i, seg) in program.segments.iter().enumerate() {
+            if !matches!(seg, Segment::Arm { .. } | Segment::Reverse { .. }) {
+                continue;
+            }
+            let platform = if i < 4 { s1 } else { s2 };
+            let base = platform * rt.model.mount;
+            let near = cell.obstacles_near(prf_runtime::executor::planar(&platform));
+            for q in arm_setpoints(&run, i) {
+                let kin = ArmKinematics::new(&rt.model, &JointVector::from(q));
+                let c = cell.arm_clearance(&base, &kin, &near);
+                worst = worst.min(c.world);
+                assert!(
+                    c.world >= r,
+                    "{}: segment {i} comes {:.1} mm from {:?} (r = {} mm)",
+                    ft.label(),
+                    c.world * 1e3,
+                    c.world_contact,
+                    r * 1e3
+                );
+            }
+        }
+    }
+    println!(
+        "smallest true clearance of the 18 risk-0 programs: {:.1} mm",
+        worst * 1e3
+    );
+}
+
+#[test]
+fn two_diverse_demonstrations_make_all_18_tasks_feasible() {
+    let bytes = two_demo_blob(("Part1", "CNC", "Printer"), ("Part2", "Printer", "Table"));
+    let rt = Runtime::load(&bytes).expect("load");
+    for ft in world_tasks(&World::example()) {
+        let p = plan(&rt, &ft.task()).unwrap_or_else(|e| panic!("{}: {e}", ft.label()));
+        assert!(p.skills.feasible, "{}: J* = {}", ft.label(), p.skills.j);
+    }
+}
+
+#[test]
+fn two_similar_demonstrations_leave_printer_and_table_tasks_symbolically_infeasible() {
+    let bytes = two_demo_blob(("Part1", "CNC", "CNC"), ("Part2", "CNC", "CNC"));
+    let rt = Runtime::load(&bytes).expect("load");
+    for ft in world_tasks(&World::example()) {
+        let result = plan(&rt, &ft.task());
+        let cnc_only = ft.from.1 == "CNC" && ft.to.1 == "CNC";
+        if cnc_only {
+            assert!(result.is_ok(), "{}: {:?}", ft.label(), result.err());
+            continue;
+        }
+        let Err(PlanError::Infeasible(missing)) = result else {
+            panic!(
+                "{}: expected symbolically infeasible, got {result:?}",
+                ft.label()
+            );
+        };
+        // The dataset's floor plan names every location type; the two programs never went
+        // to a Printer or a Table, so their stances and workspaces are missing.
+        for kind in [&ft.from.1, &ft.to.1] {
+            if kind != "CNC" {
+                assert!(
+                    missing.contains(&Missing::Stances(kind))
+                        && missing.contains(&Missing::Workspace(kind)),
+                    "{}: {missing:?}",
+                    ft.label()
+                );
+            }
+        }
+        let text = PlanError::Infeasible(missing).to_string();
+        assert!(
+            text.starts_with("symbolically infeasible: missing stances at"),
+            "{text}"
+        );
+    }
+}
+
+/// Risk of `rdmp` from q_a,H to `goal` by a second route: the whole-trajectory integrator
+/// and the risk accumulator, no pruning. `None` if integration fails.
+fn brute_force_risk(
+    rt: &Runtime<'_>,
+    side: &prf_runtime::skill_plan::Side<'_>,
+    stance: usize,
+    grasp: usize,
+    skill: u16,
+) -> Option<f64> {
+    let rdmp = rt.skill_rdmp(skill as usize).ok()??;
+    let goal = side.goal(stance, grasp)?;
+    let base = &side.arm_bases[stance];
+    let model = &rt.model;
+    let q0 = JointVector::from(model.home);
+    let mut acc = RiskAccumulator::default();
+    acc.add(model, &side.field, base, &ArmKinematics::new(model, &q0));
+    integrate(model, &rdmp, &q0, goal, &rt.config.rdmp, |s| {
+        acc.add(model, &side.field, base, &ArmKinematics::new(model, &s.q));
+    })
+    .ok()?;
+    Some(acc.risk())
+}
+
+#[test]
+fn skill_plan_equals_the_brute_force_grid() {
+    // A reduced knowledge base with risky candidates: Part1 from a CNC with the top grasp
+    // (3 demonstrations) and to a Printer with the angled grasp, Part2 from a Table to a
+    // Printer with the angled grasp only.
+    let world = World::example();
+    let bytes = blob_of(&world, |p, f, t, (a1, a2, g)| {
+        (a1, a2) == (0, 0)
+            && match (p, f, t) {
+                ("Part1", "CNC", t) => g == 0 || t == "Printer",
+                ("Part2", "Table", "Printer") => g == 1,
+                _ => false,
+            }
+    });
+    let rt = Runtime::load(&bytes).expect("load");
+    let classes = PttClasses::of(&rt).expect("classes");
+    let mut risky = 0;
+    for ft in world_tasks(&world) {
+        let task = ft.task();
+        let Ok(Ok(resolved)) = task.resolve(&rt) else {
+            continue;
+        };
+        let sides = PttSides::new(&rt, &task, &resolved, &classes).expect("sides");
+        let planned = plan(&rt, &task).expect("plan").skills;
+        // The full grid: every (grasp, stance 1, pick skill, stance 2, place skill), J and the
+        // documented tie key (J, grasp, r_pick, pick position, r_place, place position).
+        let pick: Vec<(u8, u16)> = sides.pick.candidates().collect();
+        let place: Vec<(u8, u16)> = sides.place.candidates().collect();
+        let mut best: Option<(f64, usize, f64, usize, f64, usize)> = None;
+        let mut grid = 0u64;
+        for g in 0..sides.grasps {
+            let r1: Vec<_> = pick
+                .iter()
+                .map(|&(s, k)| brute_force_risk(&rt, &sides.pick, s as usize, g, k))
+                .collect();
+            let r2: Vec<_> = place
+                .iter()
+                .map(|&(s, k)| brute_force_risk(&rt, &sides.place, s as usize, g, k))
+                .collect();
+            for (i, a) in r1.iter().enumerate() {
+                for (j, b) in r2.iter().enumerate() {
+                    grid += 2;
+                    let (Some(a), Some(b)) = (a, b) else { continue };
+                    let key = (a.max(*b), g, *a, i, *b, j);
+                    if best.is_none_or(|k| key.partial_cmp(&k) == Some(std::cmp::Ordering::Less)) {
+                        best = Some(key);
+                    }
+                }
+            }
+        }
+        assert_eq!(planned.stats.grid_integrations, grid, "{}", ft.label());
+        let (j, g, r_pick, i, r_place, k) = best.expect("some candidate integrates");
+        let c = planned.choice.expect("choice");
+        assert_eq!(planned.j, j, "{}: J*", ft.label());
+        assert_eq!(
+            (planned.r_pick, planned.r_place),
+            (r_pick, r_place),
+            "{}",
+            ft.label()
+        );
+        assert_eq!(c.grasp as usize, g, "{}", ft.label());
+        assert_eq!((c.stance_from, c.pick_skill), pick[i], "{}", ft.label());
+        assert_eq!((c.stance_to, c.place_skill), place[k], "{}", ft.label());
+        risky += (j > 0.0) as usize;
+        println!(
+            "{}: J* = {:.2} mm, {} integrations against a grid of {}",
+            ft.label(),
+            j * 1e3,
+            planned.stats.integrations,
+            grid
+        );
+    }
+    assert!(
+        risky > 0,
+        "the reduced knowledge base should make some task risky"
+    );
+}
+
+#[test]
+fn the_executor_runs_exactly_the_planned_trajectory() {
+    let world = World::example();
+    let rt = Runtime::load(full_blob()).expect("load");
+    let ft = FloorTask::new(&world, "Part2", "Printer1", "CNC1").expect("task");
+    let task = ft.task();
+    let p = plan(&rt, &task).expect("plan");
+    let program = p.program.as_ref().expect("program");
+    let c = p.skills.choice.expect("choice");
+    let run = execute(&rt, program, &ft.home, ExecutorConfig::default(), 200_000);
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    for (k, s) in run.setpoints.iter().enumerate() {
+        assert_eq!(s.seq as usize, k + 1, "sequence numbers count every tick");
+    }
+    let resolved = task.resolve(&rt).expect("blob").expect("feasible");
+    let sides = PttSides::new(&rt, &task, &resolved, &PttClasses::of(&rt).unwrap()).unwrap();
+    let sides = [
+        (&sides.pick, c.stance_from, c.pick_skill, p.skills.r_pick),
+        (&sides.place, c.stance_to, c.place_skill, p.skills.r_place),
+    ];
+    let arm_segments: Vec<usize> = program
+        .segments
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| matches!(s, Segment::Arm { .. }))
+        .map(|(i, _)| i)
+        .collect();
+    assert_eq!(arm_segments.len(), 2);
+    for (&seg, (side, stance, skill, risk)) in arm_segments.iter().zip(sides) {
+        let mut planned = Vec::new();
+        let rdmp = rt.skill_rdmp(skill as usize).unwrap().unwrap();
+        let goal = side.goal(stance as usize, c.grasp as usize).unwrap();
+        let base = &side.arm_bases[stance as usize];
+        let e = evaluate_arm_motion(&rt, &rdmp, goal, &side.field, base, f64::INFINITY, |q| {
+            planned.push(<[f64; 7]>::from(*q))
+        });
+        assert!(matches!(e, Evaluation::Risk { .. }));
+        // Forward: q_1 … q_n; the gripper waits at q_n; backwards: q_{n−1} … q_0.
+        let forward = arm_setpoints(&run, seg);
+        let backward = arm_setpoints(&run, seg + 2);
+        assert_eq!(forward, planned[1..], "segment {seg}: forward motion");
+        let mut reversed = planned[..planned.len() - 1].to_vec();
+        reversed.reverse();
+        assert_eq!(backward, reversed, "segment {seg}: reversed motion");
+        // The risk of what was executed is the planned risk.
+        let mut acc = RiskAccumulator::default();
+        let model = &rt.model;
+        for q in std::iter::once(&model.home)
+            .chain(&forward)
+            .chain(&backward)
+        {
+            acc.add(
+                model,
+                &side.field,
+                base,
+                &ArmKinematics::new(model, &JointVector::from(*q)),
+            );
+        }
+        assert_eq!(acc.risk(), risk);
+    }
+}
+
+#[test]
+fn bad_input_gives_typed_errors_or_a_fault() {
+    let world = World::example();
+    let bytes = full_blob();
+    // A corrupt blob.
+    let mut bad = bytes.to_vec();
+    bad[bytes.len() / 2] ^= 0x10;
+    assert!(matches!(Runtime::load(&bad), Err(LoadError::Blob(_))));
+    assert!(matches!(
+        Runtime::load(&bytes[..100]),
+        Err(LoadError::Blob(_))
+    ));
+    let rt = Runtime::load(bytes).expect("load");
+    // Unknown ids (floor plan) and types (blob).
+    let e = FloorTask::new(&world, "Part9", "CNC1", "Table1").unwrap_err();
+    assert!(e.to_string().contains("unknown part id \"Part9\""), "{e}");
+    let e = FloorTask::new(&world, "Part1", "CNC1", "Lathe1").unwrap_err();
+    assert!(
+        e.to_string().contains("unknown location id \"Lathe1\""),
+        "{e}"
+    );
+    let ft = FloorTask::new(&world, "Part1", "CNC1", "Table1").unwrap();
+    let mut task = ft.task();
+    task.to.kind = "Lathe";
+    assert!(matches!(
+        plan(&rt, &task),
+        Err(PlanError::Infeasible(m)) if m.as_slice() == [Missing::LocationType("Lathe")]
+    ));
+    // Non-finite poses, same location.
+    let mut task = ft.task();
+    task.goal.translation.vector.x = f64::NAN;
+    assert_eq!(
+        plan(&rt, &task).unwrap_err(),
+        PlanError::Task(TaskError::NonFinite { what: "part goal" })
+    );
+    let mut task = ft.task();
+    task.to = task.from;
+    assert_eq!(
+        plan(&rt, &task).unwrap_err(),
+        PlanError::Task(TaskError::SameLocation)
+    );
+    // An unreachable goal: the part 3 m above the table. No skill reaches it safely.
+    let mut task = ft.task();
+    task.goal.translation.vector.z += 3.0;
+    let p = plan(&rt, &task).expect("plans");
+    assert!(
+        !p.skills.feasible && p.skills.j > 0.0,
+        "J* = {}",
+        p.skills.j
+    );
+
+    // The executor: NaN measured state, a tracking error, a gripper that never closes.
+    let p = plan(&rt, &ft.task()).expect("plan");
+    let program = p.program.expect("program");
+    let home = ft.home;
+    let mut reversal = Box::new(Reversal::new());
+    let t = |ms: u64| embassy_time::Instant::from_millis(ms);
+    let at_home = Measured {
+        arm: rt.model.home,
+        base: prf_runtime::executor::planar(&home),
+        gripper: 0.0,
+    };
+    let mut ex = Executor::new(
+        &rt,
+        program.clone(),
+        &home,
+        ExecutorConfig::default(),
+        &mut reversal,
+    );
+    let first = ex.tick(t(0), &at_home);
+    assert_eq!(first.mode, Mode::Base);
+    let mut nan = at_home;
+    nan.arm[3] = f64::NAN;
+    let sp = ex.tick(t(1), &nan);
+    assert_eq!((sp.mode, ex.fault()), (Mode::Fault, Some(Fault::NonFinite)));
+    assert_eq!(sp.arm, first.arm, "holds the last safe setpoint");
+    assert_eq!(sp.arm_velocity, [0.0; 7]);
+    assert_eq!(ex.tick(t(2), &at_home).mode, Mode::Fault, "a fault latches");
+
+    let mut ex = Executor::new(
+        &rt,
+        program.clone(),
+        &home,
+        ExecutorConfig::default(),
+        &mut reversal,
+    );
+    let mut off = at_home;
+    off.arm[1] += 0.3;
+    ex.tick(t(0), &off);
+    assert!(matches!(ex.fault(), Some(Fault::Tracking { joint: 1, .. })));
+
+    // The platform never arrives: timeout after base_timeout.
+    let cfg = ExecutorConfig {
+        base_timeout: embassy_time::Duration::from_millis(50),
+        ..ExecutorConfig::default()
+    };
+    let mut ex = Executor::new(&rt, program, &home, cfg, &mut reversal);
+    let mut faulted_at = None;
+    for ms in 0..200 {
+        if ex.tick(t(ms), &at_home).mode == Mode::Fault {
+            faulted_at = Some(ms);
+            break;
+        }
+    }
+    assert_eq!(faulted_at, Some(51));
+    assert_eq!(ex.fault(), Some(Fault::Timeout { segment: 0 }));
+    let sp = ex.tick(t(0), &at_home);
+    assert_eq!(sp.mode, Mode::Fault);
+}
