@@ -21,6 +21,10 @@ pub struct Args {
     /// Measuring time per case, s.
     #[arg(long, default_value_t = 1.0)]
     seconds: f64,
+    /// Also benchmark the runtime on this blob (from `prf learn`): load, planning of every
+    /// task of the example cell, executor ticks, RAM.
+    #[arg(long)]
+    blob: Option<std::path::PathBuf>,
 }
 
 /// Per-call statistics in nanoseconds.
@@ -179,6 +183,122 @@ pub fn run(args: &Args) -> Result<()> {
         std::mem::size_of::<Rdmp>(),
         std::mem::size_of::<RdmpRun>(),
         std::mem::size_of::<RobotModel>()
+    );
+    match &args.blob {
+        Some(path) => runtime(path, secs),
+        None => {
+            println!("\n(pass --blob cell.blob for the runtime figures)");
+            Ok(())
+        }
+    }
+}
+
+/// The runtime on a blob: load, all tasks of the example cell, executor ticks, RAM.
+fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
+    use prf_offline::execute::IdealCell;
+    use prf_offline::tasks::world_tasks;
+    use prf_offline::world::World;
+    use prf_runtime::Runtime;
+    use prf_runtime::executor::{Executor, ExecutorConfig, Mode};
+    use prf_runtime::plan::plan;
+    use prf_runtime::reverse::Reversal;
+    use prf_runtime::skill_plan::PttSides;
+
+    let bytes = std::fs::read(path)?;
+    println!(
+        "\nruntime on {} ({} KiB)",
+        path.display(),
+        bytes.len() / 1024
+    );
+    let load = measure(secs, 1, || {
+        black_box(Runtime::load(black_box(&bytes)).is_ok());
+    });
+    report(
+        "Runtime::load (validate header, CRC, every record)",
+        &load,
+        "µs",
+    );
+    let rt = Runtime::load(&bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let tasks = world_tasks(&World::example());
+    let (mut integrations, mut grid, mut steps, mut feasible) = (0u64, 0u64, 0u64, 0);
+    for ft in &tasks {
+        if let Ok(p) = plan(&rt, &ft.task()) {
+            integrations += p.skills.stats.integrations as u64;
+            grid += p.skills.stats.grid_integrations;
+            steps += p.skills.stats.steps;
+            feasible += p.skills.feasible as usize;
+        }
+    }
+    let all = measure(secs.max(2.0), 1, || {
+        for ft in &tasks {
+            black_box(plan(&rt, &ft.task()).is_ok());
+        }
+    });
+    report(
+        &format!("plan all {} tasks (one core)", tasks.len()),
+        &all,
+        "ms",
+    );
+    println!(
+        "  → {feasible}/{} feasible; {integrations} RDMP integrations ({steps} steps) against the paper's grid of {grid}: {:.0}× fewer; goal ≤ 200 ms: {}",
+        tasks.len(),
+        grid as f64 / integrations.max(1) as f64,
+        if all.median <= 200e6 {
+            "met"
+        } else {
+            "NOT met"
+        }
+    );
+    // Executor ticks on the first task's program against an ideal cell, each tick timed.
+    let ft = &tasks[2];
+    let p = plan(&rt, &ft.task()).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let program = p.program.ok_or_else(|| anyhow::anyhow!("no program"))?;
+    let mut reversal = Box::new(Reversal::new());
+    let mut ex = Executor::new(
+        &rt,
+        program,
+        &ft.home,
+        ExecutorConfig::default(),
+        &mut reversal,
+    );
+    let mut cell = IdealCell::new(rt.model.home, &ft.home);
+    let (mut arm, mut other) = (Vec::new(), Vec::new());
+    let mut now = embassy_time::Instant::from_ticks(0);
+    loop {
+        let t = Instant::now();
+        let sp = ex.tick(now, black_box(&cell.measured));
+        let ns = t.elapsed().as_nanos() as f64;
+        if sp.mode == Mode::Arm {
+            arm.push(ns)
+        } else {
+            other.push(ns)
+        }
+        if matches!(sp.mode, Mode::Done | Mode::Fault) {
+            break;
+        }
+        cell.apply(&sp, 1e-3);
+        now += embassy_time::Duration::from_millis(1);
+    }
+    for (name, mut v) in [
+        ("executor tick, arm segments", arm),
+        ("executor tick, waiting segments", other),
+    ] {
+        v.sort_by(f64::total_cmp);
+        let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+        println!(
+            "  {name:<44} median {:>9.3} µs   p99 {:>9.3}   max {:>9.3}   ({} ticks)",
+            at(0.5) * 1e-3,
+            at(0.99) * 1e-3,
+            at(1.0) * 1e-3,
+            v.len()
+        );
+    }
+    println!(
+        "\nruntime RAM: Runtime {} B, Executor {} B + reversal memory {} B, planner sides {} B (stack, while planning)",
+        std::mem::size_of::<Runtime>(),
+        std::mem::size_of::<Executor>(),
+        std::mem::size_of::<Reversal>(),
+        std::mem::size_of::<PttSides>()
     );
     Ok(())
 }

@@ -3,11 +3,13 @@
 
 use crate::learn::Knowledge;
 use anyhow::{Context, bail};
+use prf_shared::JointVector;
 use prf_shared::blob::{
     self, Blob, ClassData, LocationTypeData, MAX_AFFORDANCES, PartTypeData, Payload, RDMP_COORDS,
     RdmpData, RobotData, SkillData, Table,
 };
 use prf_shared::field::Field;
+use prf_shared::kinematics::ArmKinematics;
 use prf_shared::motion::CLASSES;
 use prf_shared::se3::{Pose, pose_to_array};
 use serde::Serialize;
@@ -89,7 +91,11 @@ pub fn compile(k: &Knowledge) -> anyhow::Result<Vec<u8>> {
         .arms
         .iter()
         .zip(weights.iter_mut())
-        .map(|(a, w)| RdmpData::encode(&a.rdmp, w).context("RDMP encoding"))
+        .map(|(a, w)| {
+            let end = a.path.last().copied().unwrap_or(k.robot.home);
+            let goal = ArmKinematics::new(&k.robot, &JointVector::from(end)).tcp;
+            RdmpData::encode(&a.rdmp, &goal, w).context("RDMP encoding")
+        })
         .collect::<anyhow::Result<Vec<_>>>()?;
     let skills = k
         .skills

@@ -380,12 +380,12 @@ fn corrupt_blobs_are_refused_with_their_own_error() {
     b[0] = b'X';
     assert_eq!(Blob::parse(&b).unwrap_err(), BlobError::BadMagic);
     let mut b = bytes.clone();
-    b[8..12].copy_from_slice(&2u32.to_le_bytes());
+    b[8..12].copy_from_slice(&3u32.to_le_bytes());
     assert_eq!(
         Blob::parse(&b).unwrap_err(),
         BlobError::Version {
-            found: 2,
-            supported: 1
+            found: 3,
+            supported: 2
         }
     );
     let mut b = bytes.clone();

@@ -217,11 +217,20 @@ fn skill_plan_equals_the_brute_force_grid() {
         let planned = plan(&rt, &task).expect("plan").skills;
         // The full grid: every (grasp, stance 1, pick skill, stance 2, place skill), J and the
         // documented tie key (J, grasp, r_pick, pick position, r_place, place position).
-        let pick: Vec<(u8, u16)> = sides.pick.candidates().collect();
-        let place: Vec<(u8, u16)> = sides.place.candidates().collect();
+        let candidates = |side: &prf_runtime::skill_plan::Side<'_>, g: usize| {
+            let mut v: Vec<(u8, u16)> = Vec::new();
+            side.candidates(&rt, g, |s, k| {
+                v.push((s, k));
+                true
+            })
+            .expect("order");
+            v
+        };
         let mut best: Option<(f64, usize, f64, usize, f64, usize)> = None;
         let mut grid = 0u64;
+        let mut orders = Vec::new();
         for g in 0..sides.grasps {
+            let (pick, place) = (candidates(&sides.pick, g), candidates(&sides.place, g));
             let r1: Vec<_> = pick
                 .iter()
                 .map(|&(s, k)| brute_force_risk(&rt, &sides.pick, s as usize, g, k))
@@ -240,6 +249,7 @@ fn skill_plan_equals_the_brute_force_grid() {
                     }
                 }
             }
+            orders.push((pick, place));
         }
         assert_eq!(planned.stats.grid_integrations, grid, "{}", ft.label());
         let (j, g, r_pick, i, r_place, k) = best.expect("some candidate integrates");
@@ -252,8 +262,18 @@ fn skill_plan_equals_the_brute_force_grid() {
             ft.label()
         );
         assert_eq!(c.grasp as usize, g, "{}", ft.label());
-        assert_eq!((c.stance_from, c.pick_skill), pick[i], "{}", ft.label());
-        assert_eq!((c.stance_to, c.place_skill), place[k], "{}", ft.label());
+        assert_eq!(
+            (c.stance_from, c.pick_skill),
+            orders[g].0[i],
+            "{}",
+            ft.label()
+        );
+        assert_eq!(
+            (c.stance_to, c.place_skill),
+            orders[g].1[k],
+            "{}",
+            ft.label()
+        );
         risky += (j > 0.0) as usize;
         println!(
             "{}: J* = {:.2} mm, {} integrations against a grid of {}",

@@ -8,13 +8,14 @@
 //!   best J of an earlier grasp (risk only grows along a trajectory, so it cannot win);
 //! - a side stops at risk 0, and the search stops at J = 0.
 //!
-//! **Order and ties.** Candidates of a side are ordered stance-major (blob order of the
-//! stances), then by skill rank: skills learned at this location type with this part type
-//! first, then at this location type, then the rest, each group in blob order. Of the plans
-//! with the least J the one chosen minimises, in this order, the grasp index, r_Pick, the pick
-//! candidate's position, r_Place, the place candidate's position. (Among equally risky plans
-//! the safest pick and place are preferred.) The brute-force test sorts the full grid by this
-//! key.
+//! **Order and ties.** Candidates of a side for a grasp are ordered stance-major (blob order
+//! of the stances); within a stance, skills learned at this location type come first, then
+//! the others, each group by the distance of the skill's demonstrated TCP goal to the
+//! candidate's goal (|Δp| + 0.1 m/rad · ∠ΔR), then by blob index: the skill whose
+//! demonstration ended nearest is tried first. Of the plans with the least J the one chosen
+//! minimises, in this order, the grasp index, r_Pick, the pick candidate's position, r_Place,
+//! the place candidate's position. (Among equally risky plans the safest pick and place are
+//! preferred.) The brute-force test sorts the full grid by this key.
 //!
 //! The risk is that of exactly the trajectory the executor will run: the RDMP integrated from
 //! q_a,H with the executor's step Δt, at every configuration including q_a,H (the reversed
@@ -34,7 +35,9 @@ use prf_shared::{JointVector, blob::MAX_AFFORDANCES};
 /// The classes a part-transportation plan uses.
 pub const PTT_CLASSES: [&str; 3] = ["Pick", "Place", "Move"];
 /// Maximum skills of one class the planner orders.
-pub const MAX_SKILLS: usize = 512;
+pub const MAX_SKILLS: usize = 256;
+/// Weight of the rotation in the goal distance that orders skills, m/rad.
+pub const ROTATION_WEIGHT: f64 = 0.1;
 /// Maximum (stance, grasp) goals of one side.
 pub const MAX_GOALS: usize = 64;
 
@@ -172,7 +175,8 @@ pub struct Side<'a> {
     pub grasps: usize,
     /// World pose of the platform at each stance (the Move goal).
     pub platform: heapless::Vec<Pose, MAX_AFFORDANCES>,
-    pub skills: heapless::Vec<u16, MAX_SKILLS>,
+    /// The class's skills with an RDMP: (skill, RDMP, learned at this location type).
+    pub skills: heapless::Vec<(u16, u16, bool), MAX_SKILLS>,
 }
 
 impl<'a> Side<'a> {
@@ -180,7 +184,7 @@ impl<'a> Side<'a> {
         rt: &Runtime<'a>,
         location_type: usize,
         grasps: usize,
-        skills: heapless::Vec<u16, MAX_SKILLS>,
+        skills: heapless::Vec<(u16, u16, bool), MAX_SKILLS>,
     ) -> Result<Self, SkillPlanError> {
         Ok(Side {
             // Symbolic feasibility checked the workspace exists.
@@ -224,8 +228,35 @@ impl<'a> Side<'a> {
     }
 
     /// Candidates of the side in their documented order: (stance, skill).
-    pub fn candidates(&self) -> impl Iterator<Item = (u8, u16)> + '_ {
-        (0..self.arm_bases.len()).flat_map(move |s| self.skills.iter().map(move |&k| (s as u8, k)))
+    pub fn candidates(
+        &self,
+        rt: &Runtime<'_>,
+        grasp: usize,
+        mut visit: impl FnMut(u8, u16) -> bool,
+    ) -> Result<(), SkillPlanError> {
+        let mut order: heapless::Vec<(bool, f64, u16), MAX_SKILLS> = heapless::Vec::new();
+        for s in 0..self.arm_bases.len() {
+            let Some(goal) = self.goal(s, grasp) else {
+                continue;
+            };
+            order.clear();
+            for &(k, r, here) in &self.skills {
+                let demo = rt.blob.rdmp_goal(r as usize)?;
+                let d = (goal.translation.vector - demo.translation.vector).norm()
+                    + ROTATION_WEIGHT * goal.rotation.angle_to(&demo.rotation);
+                // Capacity: `skills` has at most MAX_SKILLS entries.
+                let _ = order.push((!here, d, k));
+            }
+            order.sort_unstable_by(|a, b| {
+                a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2))
+            });
+            for &(_, _, k) in &order {
+                if !visit(s as u8, k) {
+                    return Ok(());
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -247,27 +278,18 @@ fn stances(
     Ok(out)
 }
 
-/// Skills of class `class`, ranked for location type `t` and part type `p` (module docs).
-fn ranked_skills(
+/// The skills of class `class` that have an RDMP, marking those learned at location type `t`.
+fn class_skills(
     rt: &Runtime<'_>,
     class: usize,
     t: usize,
-    p: usize,
-) -> Result<heapless::Vec<u16, MAX_SKILLS>, SkillPlanError> {
+) -> Result<heapless::Vec<(u16, u16, bool), MAX_SKILLS>, SkillPlanError> {
     let mut out = heapless::Vec::new();
-    for rank in 0..3 {
-        for k in rt.skills_of(class) {
-            let s = rt.blob.skill(k)?;
-            let here = s.location_type == Some(t as u8);
-            let r = match (here, s.part_type == Some(p as u8)) {
-                (true, true) => 0,
-                (true, false) => 1,
-                _ => 2,
-            };
-            if r == rank && s.rdmp.is_some() {
-                out.push(k as u16)
-                    .map_err(|_| SkillPlanError::TooManySkills)?;
-            }
+    for k in rt.skills_of(class) {
+        let s = rt.blob.skill(k)?;
+        if let Some(r) = s.rdmp {
+            out.push((k as u16, r, s.location_type == Some(t as u8)))
+                .map_err(|_| SkillPlanError::TooManySkills)?;
         }
     }
     Ok(out)
@@ -359,18 +381,8 @@ impl<'a> PttSides<'a> {
             part: task.part.pose,
         };
         let n = grasps.len();
-        let mut pick = Side::new(
-            rt,
-            r.from_type,
-            n,
-            ranked_skills(rt, c.pick.0, r.from_type, r.part_type)?,
-        )?;
-        let mut place = Side::new(
-            rt,
-            r.to_type,
-            n,
-            ranked_skills(rt, c.place.0, r.to_type, r.part_type)?,
-        )?;
+        let mut pick = Side::new(rt, r.from_type, n, class_skills(rt, c.pick.0, r.from_type)?)?;
+        let mut place = Side::new(rt, r.to_type, n, class_skills(rt, c.place.0, r.to_type)?)?;
         let (mv, pk, pl) = (c.moves.1, c.pick.1, c.place.1);
         let mut result = Ok(());
         // Move(ℓ0, ℓ1) to each stance; Pick's goals there, one per grasp (Alg. 4 line 7).
@@ -432,13 +444,14 @@ fn side_minimum(
     stats: &mut PlanStats,
 ) -> Result<Best, SkillPlanError> {
     let mut best: Best = None;
-    for (s, k) in side.candidates() {
+    let mut result = Ok(());
+    side.candidates(rt, grasp, |s, k| {
         let limit = best.map_or(bound, |b| b.0.min(bound));
-        let Some(goal) = side.goal(s as usize, grasp) else {
-            continue;
-        };
-        let Some(rdmp) = rt.skill_rdmp(k as usize)? else {
-            continue;
+        let (Some(goal), Ok(Some(rdmp))) =
+            (side.goal(s as usize, grasp), rt.skill_rdmp(k as usize))
+        else {
+            result = Err(SkillPlanError::UnsupportedPlan);
+            return false;
         };
         let arm_base = &side.arm_bases[s as usize];
         stats.integrations += 1;
@@ -448,7 +461,7 @@ fn side_minimum(
                 if risk < limit {
                     best = Some((risk, s, k));
                     if risk <= 0.0 {
-                        break;
+                        return false;
                     }
                 }
             }
@@ -458,7 +471,9 @@ fn side_minimum(
             }
             Evaluation::Failed(_) => stats.failed += 1,
         }
-    }
+        true
+    })?;
+    result?;
     Ok(best)
 }
 

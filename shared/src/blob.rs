@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 pub const MAGIC: [u8; 8] = *b"PRFBLOB\0";
 /// Format version this build reads and writes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 pub const HEADER_LEN: usize = 24;
 /// Maximum affordances (stances of a location type, grasps of a part type).
 pub const MAX_AFFORDANCES: usize = 16;
@@ -337,13 +337,17 @@ pub struct RdmpData<'a> {
     pub scaled: u8,
     pub travel: [f64; 3],
     pub gamma_goal: f64,
+    /// The demonstrated TCP goal (arm base frame, [x, y, z, qw, qx, qy, qz]): the planner
+    /// tries skills whose demonstrated goal is nearest a new goal first.
+    pub goal: [f64; 7],
     #[serde(borrow)]
     pub weights: &'a [u8],
 }
 
 impl<'a> RdmpData<'a> {
-    /// Compact form of a trained RDMP; `weights` receives the f32 bytes to borrow.
-    pub fn encode(r: &Rdmp, weights: &'a mut [u8]) -> Option<Self> {
+    /// Compact form of a trained RDMP demonstrated towards `goal`; `weights` receives the
+    /// f32 bytes to borrow.
+    pub fn encode(r: &Rdmp, goal: &Pose, weights: &'a mut [u8]) -> Option<Self> {
         let p = r.position.params;
         let n = p.n_basis;
         if weights.len() != RDMP_COORDS * n * 4 {
@@ -382,6 +386,7 @@ impl<'a> RdmpData<'a> {
             scaled,
             travel: r.rotation.travel.into(),
             gamma_goal: r.gamma_goal,
+            goal: crate::se3::pose_to_array(goal),
             weights: &weights[..],
         })
     }
@@ -573,6 +578,7 @@ impl<'a> Blob<'a> {
         }
         for i in 0..p.rdmps.len() {
             self.rdmp(i)?;
+            self.rdmp_goal(i)?;
         }
         for i in 0..p.skills.len() {
             let s = self.skill(i)?;
@@ -607,6 +613,15 @@ impl<'a> Blob<'a> {
 
     pub fn part_type(&self, i: usize) -> Result<PartTypeData<'a>, BlobError> {
         self.payload.part_types.get(i, Section::PartTypes)
+    }
+
+    /// The demonstrated TCP goal of RDMP `i` (arm base frame).
+    pub fn rdmp_goal(&self, i: usize) -> Result<Pose, BlobError> {
+        let d: RdmpData<'a> = self.payload.rdmps.get(i, Section::Rdmps)?;
+        crate::se3::pose_from_array(d.goal).ok_or(BlobError::Decode {
+            section: Section::Rdmps,
+            index: i,
+        })
     }
 
     /// RDMP `i`, decoded into its working form.
