@@ -49,6 +49,11 @@ step "CLI smoke run: prf learn (those 4) + prf inspect"
 cargo run --locked -q -p prf-offline --bin prf -- learn "$smoke" -o "$smoke/cell.blob" --quiet
 cargo run --locked -q -p prf-offline --bin prf -- inspect "$smoke/cell.blob" | tail -n 4
 
+step "CLI smoke run: prf plan (every task on that blob, one program exported at 1 kHz)"
+cargo run --locked -q -p prf-offline --bin prf -- plan "$smoke/cell.blob" --all | tail -n 1
+cargo run --locked -q -p prf-offline --bin prf -- plan "$smoke/cell.blob" --part Part1 --from CNC1 \
+  --to Table1 --export "$smoke/program.csv" | tail -n 1
+
 step "cargo test (workspace)"
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
