@@ -402,7 +402,7 @@ fn bad_input_gives_typed_errors_or_a_fault() {
         p.skills.j
     );
 
-    // The executor: NaN measured state, a tracking error, a gripper that never closes.
+    // The executor: NaN measured state, a tracking error, a platform that never arrives.
     let p = plan(&rt, &ft.task()).expect("plan");
     let program = p.program.expect("program");
     let home = ft.home;
