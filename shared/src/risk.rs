@@ -18,29 +18,8 @@ pub fn eta(x: f64) -> f64 {
     if x > 0.0 { x } else { 0.0 }
 }
 
-/// max_j (sdf(c_j) + r_j) over the robot's spheres at arm configuration `kin`, with the arm
-/// base at `arm_base` in the field's frame. Before η; NaN if any input is NaN.
-pub fn configuration_excess(
-    model: &RobotModel,
-    field: &impl DistanceField,
-    arm_base: &Pose,
-    kin: &ArmKinematics,
-) -> f64 {
-    let mut centres = [Vector3::zeros(); MAX_SPHERES];
-    kin.sphere_centres(model, &mut centres);
-    let mut worst = f64::NEG_INFINITY;
-    for (s, c) in model.spheres.iter().zip(&centres) {
-        let d = field.distance(&arm_base.transform_point(&(*c).into()).coords) + s.radius;
-        if d.is_nan() {
-            return f64::NAN;
-        }
-        worst = worst.max(d);
-    }
-    worst
-}
-
 /// Running maximum of Eq. 16 along a trajectory, one configuration at a time (the planner's
-/// and the executor's per-step call).
+/// per-step call; learning and the tests use it too).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RiskAccumulator {
     excess: f64,
