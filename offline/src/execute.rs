@@ -5,7 +5,7 @@
 
 use embassy_time::Instant;
 use prf_runtime::Runtime;
-use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode, Setpoint};
+use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode, Setpoint, wrap};
 use prf_runtime::program::Program;
 use prf_runtime::reverse::Reversal;
 use prf_shared::motion::Sample;
@@ -48,9 +48,7 @@ impl IdealCell {
             m.base[0] += dx / d * step;
             m.base[1] += dy / d * step;
         }
-        let dyaw = (sp.base_goal[2] - m.base[2] + std::f64::consts::PI)
-            .rem_euclid(2.0 * std::f64::consts::PI)
-            - std::f64::consts::PI;
+        let dyaw = wrap(sp.base_goal[2] - m.base[2]);
         m.base[2] += dyaw.clamp(-BASE_YAW_RATE * dt, BASE_YAW_RATE * dt);
     }
 }

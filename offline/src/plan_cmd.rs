@@ -9,6 +9,7 @@ use prf_offline::world::World;
 use prf_runtime::executor::{ExecutorConfig, planar};
 use prf_runtime::plan::{Plan, PlanError, plan};
 use prf_runtime::{Runtime, RuntimeConfig};
+use prf_shared::motion::Param;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -157,16 +158,17 @@ fn print_plan(rt: &Runtime<'_>, ft: &FloorTask, p: &Plan, took: f64) -> anyhow::
         .iter()
         .map(|a| {
             let class = rt.class_code(a.class as usize).map_or("?", |c| c.name());
+            let params = rt
+                .blob
+                .class(a.class as usize)
+                .map(|c| c.action.params)
+                .unwrap_or_default();
             let args: Vec<&str> = a.args[..a.n_args as usize]
                 .iter()
-                .enumerate()
-                .map(|(i, &b)| {
-                    // Pick and Place take (part, location); Move takes two locations.
-                    if class != "Move" && i == 0 {
-                        ft.part.0.as_str()
-                    } else {
-                        names[b as usize].as_str()
-                    }
+                .zip(&params)
+                .map(|(&b, kind)| match kind {
+                    Param::Part => ft.part.0.as_str(),
+                    Param::Location => names[b as usize].as_str(),
                 })
                 .collect();
             format!("{class}({})", args.join(", "))

@@ -148,7 +148,7 @@ pub fn planar(p: &Pose) -> [f64; 3] {
 }
 
 /// Wraps an angle to (−π, π].
-fn wrap(a: f64) -> f64 {
+pub fn wrap(a: f64) -> f64 {
     let two_pi = 2.0 * core::f64::consts::PI;
     let r = a - two_pi * libm::floor((a + core::f64::consts::PI) / two_pi);
     if r <= -core::f64::consts::PI {
@@ -215,15 +215,6 @@ impl<'r, 'a> Executor<'r, 'a> {
     /// True once every segment completed.
     pub fn done(&self) -> bool {
         self.fault.is_none() && self.segment >= self.program.segments.len()
-    }
-
-    /// Index of the segment running.
-    pub fn segment(&self) -> usize {
-        self.segment
-    }
-
-    pub fn program(&self) -> &Program {
-        &self.program
     }
 
     /// One tick: the setpoint for `now` given the state measured at `now`.

@@ -21,8 +21,6 @@ pub struct Plan {
     pub program: Option<Program>,
     /// Platform poses (world) of the chosen stances at ℓ1 and ℓ2.
     pub stances: Option<(Pose, Pose)>,
-    /// Arm bases of the chosen stances in the frames of ℓ1 and ℓ2 (where the risk is taken).
-    pub arm_bases: Option<(Pose, Pose)>,
 }
 
 /// Why no plan came out.
@@ -87,7 +85,7 @@ pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>
     }
     let sides = PttSides::new(rt, task, &resolved, &classes)?;
     let skills = plan_skills(rt, &sides)?;
-    let (mut program, mut stances, mut arm_bases) = (None, None, None);
+    let (mut program, mut stances) = (None, None);
     if let Some(c) = skills.choice {
         let (s1, s2, g) = (
             c.stance_from as usize,
@@ -123,7 +121,6 @@ pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>
         ];
         program = Some(Program::new(rt, &actions, &realized).map_err(PlanError::Program)?);
         stances = Some((p1, p2));
-        arm_bases = Some((sides.pick.arm_bases[s1], sides.place.arm_bases[s2]));
     }
     Ok(Plan {
         resolved,
@@ -131,6 +128,5 @@ pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>
         skills,
         program,
         stances,
-        arm_bases,
     })
 }
