@@ -35,9 +35,12 @@ PATH="/usr/bin:$PATH" RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 /usr/bin/cargo buil
   --target-dir target/thumbv7em
 echo "built: $(ls target/thumbv7em/thumbv7em-none-eabihf/release/*.rlib | xargs -n1 basename | tr '\n' ' ')"
 
-step "main job smoke run: prf demo"
-cargo run --locked -q -p prf-offline --bin prf -- demo >/tmp/prf-demo.$$ || { cat /tmp/prf-demo.$$; exit 1; }
-tail -n 3 /tmp/prf-demo.$$; rm -f /tmp/prf-demo.$$
+step "main job smoke run: prf demo --task 1 (dataset, blob, firmware-sim, one task in real time)"
+cargo run --locked -q -p prf-offline --bin prf -- demo --task 1 >/tmp/prf-demo.$$ || { cat /tmp/prf-demo.$$; exit 1; }
+tail -n 4 /tmp/prf-demo.$$; rm -f /tmp/prf-demo.$$
+
+step "CLI smoke run: prf rdmp-demo (kinematics and RDMP on the built-in robot)"
+cargo run --locked -q -p prf-offline --bin prf -- rdmp-demo | tail -n 2
 
 step "CLI smoke run: prf gen (4 demonstrations) + prf check-dataset against the ground truth"
 smoke=target/smoke-dataset

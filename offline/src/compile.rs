@@ -279,3 +279,16 @@ pub fn report(bytes: &[u8]) -> anyhow::Result<String> {
     writeln!(o, "  {:<42} {:>10}", "total", kib(bytes.len()))?;
     Ok(o)
 }
+
+/// The blob of a world from the demonstrations of `chosen`: generate them with the
+/// ground-truth planner (seed 1, 100 Hz), learn with the default settings, compile.
+pub fn blob_of_demonstrations(
+    world: &crate::world::World,
+    chosen: &[crate::world::AffordedTask],
+    bar: &indicatif::ProgressBar,
+) -> anyhow::Result<Vec<u8>> {
+    let model = prf_shared::robot::RobotModel::kmr_iiwa14();
+    let ds = crate::demogen::generate_dataset(world, chosen, 1, 100.0, bar)?;
+    let k = crate::learn::learn(&ds, &model, &crate::learn::LearnConfig::default(), bar)?;
+    compile(&k)
+}

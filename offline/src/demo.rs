@@ -1,235 +1,197 @@
-//! `prf demo`: what the math core does, on the built-in robot, in one screen.
+//! `prf demo`, the main job: the whole pipeline on the built-in example cell with no
+//! arguments. Generate the dataset (cached), learn and compile the blob, start firmware-sim,
+//! plan every task and execute each feasible one in real time over iceoryx2 shared memory,
+//! and print one row per task.
 
-use crate::{plot, synthetic};
-use anyhow::{Context, Result};
-use nalgebra::{Isometry3, Translation3, Vector3};
-use prf_shared::dmp::DmpParams;
-use prf_shared::kinematics::ArmKinematics;
-use prf_shared::nullspace::kernel;
-use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpStep, integrate, null_space_coordinate};
+use crate::run_cmd::{ChildGuard, spawn_firmware};
+use anyhow::{Context, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use prf_offline::cell::{Cell, CellConfig};
+use prf_offline::compile::compile;
+use prf_offline::dataset::Dataset;
+use prf_offline::demogen::generate_dataset;
+use prf_offline::learn::{LearnConfig, learn};
+use prf_offline::tasks::world_tasks;
+use prf_offline::world::World;
+use prf_runtime::Runtime;
+use prf_runtime::executor::planar;
+use prf_runtime::plan::plan;
 use prf_shared::robot::RobotModel;
-use prf_shared::se3::{Pose, log};
-use prf_shared::{JointVector, NA};
-use std::io::Write;
 use std::path::PathBuf;
+use std::time::Instant;
 
-#[derive(clap::Args, Default)]
+#[derive(clap::Args, Debug, Default)]
 pub struct Args {
-    /// Write the demonstration, its reproduction and every generalised trajectory as CSV
-    /// (t, a1..a7) into this directory, with `elbow.svg`: the elbow's x over time for all of
-    /// them (the paper's Fig. 3iv).
+    /// Working directory: the dataset is cached here, the blob and the controller's log are
+    /// written here.
+    #[arg(long, default_value = "target/prf-demo")]
+    pub dir: PathBuf,
+    /// Execute only these tasks (1-based, as listed; e.g. --task 1 --task 7).
     #[arg(long)]
-    csv: Option<PathBuf>,
-    /// Duration of the demonstrated reach, s.
-    #[arg(long, default_value_t = 2.5)]
-    duration: f64,
+    pub task: Vec<usize>,
+    /// Generate the dataset again even if it is cached.
+    #[arg(long)]
+    pub regenerate: bool,
 }
 
-const DEMO_DT: f64 = 0.01;
+fn bar(len: u64, what: &str) -> ProgressBar {
+    ProgressBar::new(len).with_style(
+        ProgressStyle::with_template(&format!("{what} {{bar:40}} {{pos}}/{{len}} {{elapsed}}"))
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    )
+}
 
-pub fn run(args: &Args) -> Result<()> {
-    let duration = if args.duration > 0.0 {
-        args.duration
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let dir = if a.dir.as_os_str().is_empty() {
+        PathBuf::from("target/prf-demo")
     } else {
-        2.5
+        a.dir.clone()
     };
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let world = World::example();
     let model = RobotModel::kmr_iiwa14();
-    let cfg = RdmpConfig::default();
-    println!(
-        "PRF kinematics + RDMP demonstration — built-in KMR iiwa 14 R820 with parallel gripper"
-    );
-    println!(
-        "robot: {NA} joints, {} collision spheres, TCP {:.3} m beyond the flange",
-        model.spheres.len(),
-        model.tcp.translation.vector.norm()
-    );
-    let home = JointVector::from(model.home);
-    let k = ArmKinematics::new(&model, &home);
-    println!(
-        "home q_a,H = {} deg → TCP {} m (arm base frame), manipulability {:.4}",
-        fmt_deg(&home),
-        fmt_vec(&k.tcp.translation.vector),
-        kernel(&k.jacobian(&model)).manipulability
-    );
-
-    let demo = synthetic::reach(duration, DEMO_DT);
-    let mut gamma = vec![0.0; demo.len()];
-    null_space_coordinate(&model, &demo, cfg.min_manipulability, &mut gamma)
-        .map_err(|e| anyhow::anyhow!("null space of the demonstration: {e:?}"))?;
-    let params = DmpParams::default();
-    let rdmp = Rdmp::train(&model, &demo, &gamma, DEMO_DT, &params)
-        .map_err(|e| anyhow::anyhow!("TrainRDMP: {e:?}"))?;
-    println!(
-        "\ndemonstration: {duration} s reach at {:.0} Hz ({} samples) with an elbow swivel of {} rad",
-        1.0 / DEMO_DT,
-        demo.len(),
-        synthetic::SWIVEL
-    );
-    println!(
-        "TrainRDMP (Alg. 1): {} bases per DMP, τ = {:.2} s, γ_g = {:.4}, max |γ| = {:.4}",
-        params.n_basis,
-        rdmp.duration(),
-        rdmp.gamma_goal,
-        gamma.iter().fold(0.0f64, |m, g| m.max(g.abs()))
-    );
-
-    let q0 = JointVector::from(demo[0]);
-    let demo_goal = ArmKinematics::new(&model, &JointVector::from(*demo.last().unwrap())).tcp;
-    let mut repro = Vec::new();
-    integrate(&model, &rdmp, &q0, &demo_goal, &cfg, |s| repro.push(*s))
-        .map_err(|e| anyhow::anyhow!("IntegrateRDMP: {e:?}"))?;
-    let ratio = (DEMO_DT / cfg.dt).round() as usize;
-    let (mut sq, mut max, mut n) = (0.0, 0.0f64, 0);
-    for s in repro.iter().filter(|s| s.step % ratio == 0) {
-        let d = s.q - JointVector::from(demo[s.step / ratio]);
-        sq += d.norm_squared() / NA as f64;
-        max = max.max(d.amax());
-        n += 1;
+    let tasks = world_tasks(&world);
+    for &t in &a.task {
+        if t == 0 || t > tasks.len() {
+            bail!("--task {t}: the example cell has tasks 1..={}", tasks.len());
+        }
     }
+
+    // 1. Dataset: the 64 afforded tasks of the example cell, by the ground-truth planner.
+    let ds_dir = dir.join("dataset");
+    let marker = ds_dir.join(".complete");
+    let t0 = Instant::now();
+    let dataset = if marker.exists() && !a.regenerate {
+        let ds = Dataset::read(&ds_dir, &model).map_err(|e| anyhow::anyhow!("{e}"))?;
+        println!(
+            "dataset: {} demonstrations cached in {} (--regenerate to make them again)",
+            ds.demonstrations.len(),
+            ds_dir.display()
+        );
+        ds
+    } else {
+        let afforded = world.afforded_tasks();
+        let b = bar(afforded.len() as u64, "generating demonstrations");
+        let ds = generate_dataset(&world, &afforded, 1, 100.0, &b)?;
+        b.finish_and_clear();
+        ds.write(&ds_dir)
+            .with_context(|| format!("writing {}", ds_dir.display()))?;
+        std::fs::write(&marker, b"")?;
+        println!(
+            "dataset: generated {} demonstrations into {} in {:.1} s",
+            ds.demonstrations.len(),
+            ds_dir.display(),
+            t0.elapsed().as_secs_f64()
+        );
+        ds
+    };
+
+    // 2. Learn and compile.
+    let t1 = Instant::now();
+    let b = bar(0, "learning");
+    let knowledge = learn(&dataset, &model, &LearnConfig::default(), &b)?;
+    b.finish_and_clear();
+    let bytes = compile(&knowledge)?;
+    let blob = dir.join("cell.blob");
+    std::fs::write(&blob, &bytes).with_context(|| format!("writing {}", blob.display()))?;
     println!(
-        "IntegrateRDMP (Alg. 2) at {:.0} Hz to the demonstrated goal: joint RMSE {:.2e} rad, max {:.2e} rad",
-        1.0 / cfg.dt,
-        (sq / n as f64).sqrt(),
-        max
+        "blob: {} ({:.1} KiB) learned in {:.2} s",
+        blob.display(),
+        bytes.len() as f64 / 1024.0,
+        t1.elapsed().as_secs_f64()
+    );
+    let rt = Runtime::load(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", blob.display()))?;
+
+    // 3. The controller, a process of its own, on a cell name no one else uses.
+    let cell_name = format!("demo-{}", std::process::id());
+    let log = dir.join("firmware-sim.log");
+    let home = planar(&world.home.pose());
+    let mut child = ChildGuard(spawn_firmware(&cell_name, home, &log)?);
+    let mut cell = Cell::connect(CellConfig::new(&cell_name), &rt)?;
+    println!(
+        "firmware-sim: pid {}, cell {cell_name:?}, log {}",
+        child.0.id(),
+        log.display()
     );
 
-    println!("\ngeneralisation to new TCP goals (10 cm away, tilted 0.1 rad):");
+    // 4. Plan and execute.
     println!(
-        "  {:>22}  {:>12}  {:>12}  {:>13}  {:>10}",
-        "goal offset [m]", "end pos err", "end rot err", "max q̇/limit", "min manip."
+        "\n{:>2}  {:<22} {:<8} {:>7}  {:<10} {:>5} {:>8} {:>9} {:>4} {:>6} {:>13}",
+        "#",
+        "task",
+        "feasible",
+        "J* mm",
+        "stances",
+        "grasp",
+        "time s",
+        "track mrad",
+        "lost",
+        "misses",
+        "lat p50/p99 µs"
     );
-    let mut runs = Vec::new();
-    for dir in [
-        Vector3::x(),
-        -Vector3::x(),
-        Vector3::y(),
-        -Vector3::y(),
-        Vector3::z(),
-        -Vector3::z(),
-        Vector3::new(1.0, 1.0, 1.0).normalize(),
-    ] {
-        let goal: Pose = Isometry3::from_parts(
-            Translation3::from(demo_goal.translation.vector + dir * 0.1),
-            prf_shared::se3::exp(&(Vector3::new(dir.y, -dir.x, dir.z) * 0.1)) * demo_goal.rotation,
-        );
-        let mut traj: Vec<RdmpStep> = Vec::new();
-        match integrate(&model, &rdmp, &q0, &goal, &cfg, |s| traj.push(*s)) {
-            Ok(q) => {
-                let end = ArmKinematics::new(&model, &q).tcp;
-                let speed = traj
-                    .iter()
-                    .flat_map(|s| (0..NA).map(move |i| s.qd[i].abs() / model.joints[i].max_speed))
-                    .fold(0.0f64, f64::max);
-                let manip = traj
-                    .iter()
-                    .map(|s| s.manipulability)
-                    .fold(f64::INFINITY, f64::min);
-                println!(
-                    "  {:>22}  {:>9.2e} m  {:>8.3} deg  {:>13.2}  {:>10.4}",
-                    fmt_vec(&(dir * 0.1)),
-                    (end.translation.vector - goal.translation.vector).norm(),
-                    log(&(end.rotation * goal.rotation.inverse()))
-                        .norm()
-                        .to_degrees(),
-                    speed,
-                    manip
-                );
+    let (mut run, mut ok) = (0, 0);
+    for (i, ft) in tasks.iter().enumerate() {
+        if !a.task.is_empty() && !a.task.contains(&(i + 1)) {
+            continue;
+        }
+        let label = ft.label();
+        let p = match plan(&rt, &ft.task()) {
+            Ok(p) => p,
+            Err(e) => {
+                println!("{:>2}  {label:<22} no: {e}", i + 1);
+                continue;
             }
-            Err(e) => println!("  {:>22}  refused: {e:?}", fmt_vec(&(dir * 0.1))),
-        }
-        runs.push((dir, traj));
-    }
-    println!(
-        "  (speeds follow the demonstration's timing; the jerk-limited output stage keeps the arm within its limits)"
-    );
-    let far = Isometry3::from_parts(
-        Translation3::from(demo_goal.translation.vector + Vector3::new(1.5, 0.0, 0.0)),
-        demo_goal.rotation,
-    );
-    match integrate(&model, &rdmp, &q0, &far, &cfg, |_| {}) {
-        Ok(_) => println!("\nunreachable goal 1.5 m further: integrated (unexpected)"),
-        Err(e) => println!("\nunreachable goal 1.5 m further: refused with {e:?}"),
-    }
-
-    if let Some(dir) = &args.csv {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        write_csv(
-            &dir.join("demonstration.csv"),
-            demo.iter()
-                .enumerate()
-                .map(|(k, q)| (k as f64 * DEMO_DT, *q)),
-        )?;
-        write_csv(&dir.join("reproduction.csv"), steps(&repro, cfg.dt, &q0))?;
-        for (i, (_, traj)) in runs.iter().enumerate() {
-            write_csv(&dir.join(format!("goal{i}.csv")), steps(traj, cfg.dt, &q0))?;
-        }
-        let elbow_x = |q: &[f64; NA]| {
-            ArmKinematics::new(&model, &JointVector::from(*q)).frames[4]
-                .translation
-                .x
         };
-        let mut series = vec![plot::Series {
-            name: "demonstration".into(),
-            points: demo
-                .iter()
-                .enumerate()
-                .map(|(k, q)| (k as f64 * DEMO_DT, elbow_x(q)))
-                .collect(),
-            emphasis: true,
-        }];
-        for (dir, traj) in &runs {
-            series.push(plot::Series {
-                name: format!("goal {}", fmt_vec(&(dir * 0.1))),
-                points: steps(traj, cfg.dt, &q0)
-                    .step_by(10)
-                    .map(|(t, q)| (t, elbow_x(&q)))
-                    .collect(),
-                emphasis: false,
-            });
-        }
-        let svg = plot::line_plot(
-            "RDMP generalisation: elbow (link 4) x",
-            "t [s]",
-            "x [m], arm base frame",
-            &series,
+        let s = &p.skills;
+        let choice = s.choice.map_or(("-".to_string(), "-".to_string()), |c| {
+            (
+                format!("{}/{}", c.stance_from, c.stance_to),
+                c.grasp.to_string(),
+            )
+        });
+        let head = format!(
+            "{:>2}  {label:<22} {:<8} {:>7.1}  {:<10} {:>5}",
+            i + 1,
+            if s.feasible { "yes" } else { "no" },
+            s.j * 1e3,
+            choice.0,
+            choice.1
         );
-        let path = dir.join("elbow.svg");
-        std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
-        println!("trajectories and elbow.svg written to {}", dir.display());
-    }
-    Ok(())
-}
-
-fn steps<'a>(
-    traj: &'a [RdmpStep],
-    dt: f64,
-    q0: &JointVector,
-) -> impl Iterator<Item = (f64, [f64; NA])> + 'a {
-    std::iter::once((0.0, (*q0).into()))
-        .chain(traj.iter().map(move |s| (s.step as f64 * dt, s.q.into())))
-}
-
-fn write_csv(path: &std::path::Path, rows: impl Iterator<Item = (f64, [f64; NA])>) -> Result<()> {
-    let mut f = std::io::BufWriter::new(
-        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?,
-    );
-    writeln!(f, "t,a1,a2,a3,a4,a5,a6,a7")?;
-    for (t, q) in rows {
-        write!(f, "{t:.4}")?;
-        for v in q {
-            write!(f, ",{v:.9}")?;
+        let (true, Some(program)) = (s.feasible, &p.program) else {
+            println!("{head}");
+            continue;
+        };
+        run += 1;
+        // Tasks start where the previous one ended: at home.
+        let r = cell.execute(&rt, program, &ft.home)?;
+        let tail = format!(
+            "{:>8.1} {:>9.2} {:>4} {:>6} {:>6.1}/{:<6.1}",
+            r.duration_s,
+            r.max_tracking_error * 1e3,
+            r.lost,
+            r.deadline_misses,
+            r.latency_us[0],
+            r.latency_us[1]
+        );
+        match (&r.fault, r.completed) {
+            (None, true) => {
+                ok += 1;
+                println!("{head} {tail}");
+            }
+            (f, _) => println!(
+                "{head} {tail}  FAULT: {}",
+                f.as_deref().unwrap_or("incomplete")
+            ),
         }
-        writeln!(f)?;
+    }
+    cell.shutdown()?;
+    let _ = child.0.wait();
+    println!(
+        "\n{ok} of {run} executed tasks completed; controller log: {}",
+        log.display()
+    );
+    if ok < run {
+        bail!("{} task(s) faulted", run - ok);
     }
     Ok(())
-}
-
-fn fmt_vec(v: &Vector3<f64>) -> String {
-    // + 0.0 turns −0.0 into 0.0 for printing.
-    format!("[{:.3}, {:.3}, {:.3}]", v.x + 0.0, v.y + 0.0, v.z + 0.0)
-}
-
-fn fmt_deg(q: &JointVector) -> String {
-    let parts: Vec<String> = q.iter().map(|v| format!("{:.0}", v.to_degrees())).collect();
-    format!("[{}]", parts.join(", "))
 }

@@ -1,6 +1,7 @@
 //! Host-side library of the PRF cell runtime: the ground-truth world and demonstration
 //! generator, the dataset format, validation, and the tools behind the `prf` binary.
 
+pub mod cell;
 pub mod compile;
 pub mod dataset;
 pub mod demogen;

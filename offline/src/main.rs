@@ -7,13 +7,15 @@ mod generate;
 mod learn_cmd;
 mod plan_cmd;
 mod plot;
+mod rdmp_demo;
+mod run_cmd;
 mod synthetic;
 
 use clap::{Parser, Subcommand};
 
 /// PRF — program a robot cell by reusing its old programs.
 ///
-/// Without a subcommand, runs `prf demo`.
+/// Without a subcommand, runs `prf demo`: the full pipeline on the built-in example cell.
 #[derive(Parser)]
 #[command(version, about, long_about = None)]
 struct Cli {
@@ -23,9 +25,12 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The main job: generate (or reuse) the example cell's dataset, learn the blob, start
+    /// firmware-sim, plan all 18 tasks and execute them in real time over shared memory.
+    Demo(demo::Args),
     /// Kinematics + RDMP demonstration on the built-in KMR iiwa 14: FK, null space, RDMP
     /// training, reproduction and generalisation to new goals, singularity handling.
-    Demo(demo::Args),
+    RdmpDemo(rdmp_demo::Args),
     /// Micro-benchmarks of the math core (medians, with the paper's SVD formulation as the
     /// baseline in the same process).
     Bench(bench::Args),
@@ -42,17 +47,25 @@ enum Command {
     /// Plan a task with the runtime (task plan, SkillPlan-PTT with minimum risk), print the
     /// choice, optionally export the program at 1 kHz; `--all` plans every task of the cell.
     Plan(plan_cmd::Args),
+    /// Plan one task and execute it in real time on the host cell (1 kHz, embassy-time, Ruckig
+    /// output stage) against firmware-sim over iceoryx2 shared memory.
+    Run(run_cmd::Args),
+    /// The simulated iiwa joint controller (same as the `prf-firmware-sim` binary).
+    FirmwareSim(prf_firmware_sim::cli::Args),
 }
 
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         None => demo::run(&demo::Args::default()),
         Some(Command::Demo(args)) => demo::run(&args),
+        Some(Command::RdmpDemo(args)) => rdmp_demo::run(&args),
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Gen(args)) => generate::run(&args),
         Some(Command::CheckDataset(args)) => check::run(&args),
         Some(Command::Learn(args)) => learn_cmd::run(&args),
         Some(Command::Inspect(args)) => learn_cmd::inspect(&args),
         Some(Command::Plan(args)) => plan_cmd::run(&args),
+        Some(Command::Run(args)) => run_cmd::run(&args),
+        Some(Command::FirmwareSim(args)) => prf_firmware_sim::cli::run(&args),
     }
 }

@@ -8,37 +8,11 @@
 use crate::dataset::Sample;
 use crate::world::geometry::{Cell, Contact};
 use prf_shared::NA;
+pub use prf_shared::limits::MotionLimits;
 
 /// Relative tolerance on speed and acceleration limits: finite differences of stored samples
 /// (9 decimals) carry rounding noise of about 1e-5 in acceleration at 100 Hz.
 pub const LIMIT_TOLERANCE: f64 = 1e-3;
-
-/// Speed and acceleration limits of a program.
-#[derive(Clone, Copy, Debug)]
-pub struct MotionLimits {
-    /// Arm joint speed limits, rad/s.
-    pub arm_speed: [f64; NA],
-    /// Arm joint acceleration limits, rad/s².
-    pub arm_acceleration: [f64; NA],
-    /// Platform speed limits: x, y (m/s), yaw (rad/s).
-    pub base_speed: [f64; 3],
-    /// Platform acceleration limits: m/s², m/s², rad/s².
-    pub base_acceleration: [f64; 3],
-}
-
-impl MotionLimits {
-    /// The KMR iiwa: arm speeds from the model; accelerations of 2 × the speed limit per
-    /// second (full speed in 0.5 s), platform 0.5 m/s, 0.5 rad/s, 0.5 m/s², 0.5 rad/s².
-    pub fn kmr_iiwa(model: &prf_shared::robot::RobotModel) -> Self {
-        let arm_speed = std::array::from_fn(|j| model.joints[j].max_speed);
-        MotionLimits {
-            arm_speed,
-            arm_acceleration: arm_speed.map(|v| 2.0 * v),
-            base_speed: [0.5, 0.5, 0.5],
-            base_acceleration: [0.5, 0.5, 0.5],
-        }
-    }
-}
 
 /// The smallest clearances and largest limit ratios found along a program.
 #[derive(Clone, Debug)]

@@ -3,10 +3,8 @@
 //! executor against the planner, and bad input.
 
 use indicatif::ProgressBar;
-use prf_offline::compile::compile;
-use prf_offline::demogen::generate_dataset;
+use prf_offline::compile::blob_of_demonstrations;
 use prf_offline::execute::{Execution, execute};
-use prf_offline::learn::{LearnConfig, learn};
 use prf_offline::tasks::{FloorTask, world_tasks};
 use prf_offline::world::World;
 use prf_offline::world::geometry::Cell;
@@ -21,7 +19,6 @@ use prf_shared::JointVector;
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::rdmp::integrate;
 use prf_shared::risk::RiskAccumulator;
-use prf_shared::robot::RobotModel;
 use std::sync::OnceLock;
 
 /// A blob learned from the example cell's afforded tasks selected by `keep`.
@@ -30,7 +27,6 @@ fn blob_of(
     world: &World,
     keep: impl Fn(&str, &str, &str, (usize, usize, usize)) -> bool,
 ) -> Vec<u8> {
-    let model = RobotModel::kmr_iiwa14();
     let chosen: Vec<_> = world
         .afforded_tasks()
         .into_iter()
@@ -44,9 +40,7 @@ fn blob_of(
             )
         })
         .collect();
-    let ds = generate_dataset(world, &chosen, 1, 100.0, &ProgressBar::hidden()).expect("gen");
-    let k = learn(&ds, &model, &LearnConfig::default(), &ProgressBar::hidden()).expect("learn");
-    compile(&k).expect("compile")
+    blob_of_demonstrations(world, &chosen, &ProgressBar::hidden()).expect("blob")
 }
 
 /// The blob of all 64 demonstrations (once).

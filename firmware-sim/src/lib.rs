@@ -1,0 +1,13 @@
+//! `prf-firmware-sim`: the simulated KUKA iiwa joint controller of the host cell, a process of
+//! its own. It takes the cell's setpoints from iceoryx2 shared memory, tracks them with a
+//! per-joint servo model, drives the platform and the gripper, and publishes the measured
+//! joint state at 1 kHz. It refuses setpoints beyond the joint or speed limits and brakes to
+//! standstill (Ruckig) when the setpoints stop.
+
+pub mod cli;
+pub mod clock;
+pub mod controller;
+pub mod guard;
+pub mod link;
+pub mod motion;
+pub mod servo;

@@ -1,0 +1,394 @@
+//! End to end with real processes and real shared memory: the `prf` binary runs the host cell
+//! (`prf run`) and the simulated joint controller (`prf firmware-sim`) as separate processes
+//! talking over iceoryx2; this test process watches both topics as a passive subscriber.
+//!
+//! Every test uses its own cell name (pid + test), so tests never share services with each
+//! other or with a running `prf demo`. The tests are real-time: they run one at a time.
+
+use indicatif::ProgressBar;
+use prf_firmware_sim::clock::now_ns;
+use prf_firmware_sim::link::{self, Observer};
+use prf_offline::compile::blob_of_demonstrations;
+use prf_offline::tasks::FloorTask;
+use prf_offline::world::{Planar, World};
+use prf_runtime::executor::planar;
+use prf_shared::NA;
+use prf_shared::ipc::{JointStateMsg, SetpointMsg, flags, mode, status};
+use prf_shared::kinematics::ArmKinematics;
+use prf_shared::limits::MotionLimits;
+use prf_shared::robot::RobotModel;
+use prf_shared::se3::Pose;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// Real-time tests share two cores: one at a time.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+/// The task every test runs.
+const TASK: [&str; 3] = ["Part1", "CNC1", "Table1"];
+
+fn dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let d = std::env::temp_dir().join(format!("prf-cell-test-{}", std::process::id()));
+        std::fs::create_dir_all(&d).expect("temp dir");
+        d
+    })
+}
+
+/// The blob of the paper's two diverse demonstrations (all 18 tasks feasible).
+fn blob() -> &'static Path {
+    static BLOB: OnceLock<PathBuf> = OnceLock::new();
+    BLOB.get_or_init(|| {
+        let world = World::example();
+        let chosen: Vec<_> = world
+            .afforded_tasks()
+            .into_iter()
+            .filter(|a| {
+                let t = &a.task;
+                let key = (
+                    world.parts[t.part].id.as_str(),
+                    world.locations[t.from].kind.as_str(),
+                    world.locations[t.to].kind.as_str(),
+                );
+                (a.approach_from, a.approach_to, a.grasp) == (0, 0, 0)
+                    && (key == ("Part1", "CNC", "Printer") || key == ("Part2", "Printer", "Table"))
+            })
+            .collect();
+        let bytes = blob_of_demonstrations(&world, &chosen, &ProgressBar::hidden()).expect("blob");
+        let path = dir().join("cell.blob");
+        std::fs::write(&path, bytes).expect("write blob");
+        path
+    })
+}
+
+fn floor_task() -> FloorTask {
+    FloorTask::new(&World::example(), TASK[0], TASK[1], TASK[2]).expect("task")
+}
+
+/// A child process that is killed when dropped.
+struct Proc(Child);
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+impl Proc {
+    /// Waits up to `limit` for the exit.
+    fn wait_for(&mut self, limit: Duration) -> ExitStatus {
+        let t0 = Instant::now();
+        loop {
+            if let Some(s) = self.0.try_wait().expect("try_wait") {
+                return s;
+            }
+            assert!(
+                t0.elapsed() < limit,
+                "process still running after {limit:?}"
+            );
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+}
+
+fn prf() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_prf"))
+}
+
+fn firmware(cell: &str, watchdog: u32) -> Proc {
+    let home = planar(&floor_task().home);
+    Proc(
+        prf()
+            .args(["firmware-sim", "--cell", cell, "--exit-with-parent"])
+            .arg(format!("--watchdog={watchdog}"))
+            .arg(format!("--base={},{},{}", home[0], home[1], home[2]))
+            .arg("--log")
+            .arg(dir().join(format!("{cell}.log")))
+            .spawn()
+            .expect("start prf firmware-sim"),
+    )
+}
+
+fn run_cell(cell: &str, json: &Path, extra: &[&str]) -> Proc {
+    Proc(
+        prf()
+            .arg("run")
+            .arg(blob())
+            .args([
+                "--part", TASK[0], "--from", TASK[1], "--to", TASK[2], "--cell", cell,
+            ])
+            .arg("--json")
+            .arg(json)
+            .args(extra)
+            .spawn()
+            .expect("start prf run"),
+    )
+}
+
+/// Everything seen on the cell's two topics, gathered by a thread of this process.
+struct Watch {
+    stop: Arc<AtomicBool>,
+    seen: Arc<Mutex<(Vec<SetpointMsg>, Vec<JointStateMsg>)>>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Watch {
+    /// Starts watching; returns once the controller's joint states arrive.
+    fn start(cell: &str) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let seen = Arc::new(Mutex::new((Vec::new(), Vec::new())));
+        let (stop2, seen2, cell) = (stop.clone(), seen.clone(), cell.to_string());
+        let thread = std::thread::spawn(move || {
+            let node = link::node(&format!("prf-test-observer-{}", std::process::id()))
+                .expect("observer node");
+            let obs = Observer::open(&node, &cell).expect("observer");
+            let (mut sp, mut js) = (Vec::new(), Vec::new());
+            while !stop2.load(Ordering::Relaxed) {
+                obs.drain(&mut sp, &mut js).expect("drain");
+                if !sp.is_empty() || !js.is_empty() {
+                    let mut s = seen2.lock().unwrap();
+                    s.0.append(&mut sp);
+                    s.1.append(&mut js);
+                }
+                std::thread::sleep(Duration::from_micros(500));
+            }
+        });
+        let w = Watch {
+            stop,
+            seen,
+            thread: Some(thread),
+        };
+        w.until(Duration::from_secs(10), |_, js| !js.is_empty());
+        w
+    }
+
+    /// Waits until `cond` holds on what was seen so far.
+    fn until(&self, limit: Duration, cond: impl Fn(&[SetpointMsg], &[JointStateMsg]) -> bool) {
+        let t0 = Instant::now();
+        loop {
+            {
+                let s = self.seen.lock().unwrap();
+                if cond(&s.0, &s.1) {
+                    return;
+                }
+            }
+            assert!(t0.elapsed() < limit, "condition not reached in {limit:?}");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    fn finish(mut self) -> (Vec<SetpointMsg>, Vec<JointStateMsg>) {
+        std::thread::sleep(Duration::from_millis(20));
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            t.join().expect("observer thread");
+        }
+        std::mem::take(&mut *self.seen.lock().unwrap())
+    }
+}
+
+fn report(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).expect("report");
+    serde_json::from_str(&text).expect("report JSON")
+}
+
+fn cell_name(test: &str) -> String {
+    format!("test-{}-{test}", std::process::id())
+}
+
+/// World pose of the TCP for a measured state.
+fn tcp(model: &RobotModel, js: &JointStateMsg) -> Pose {
+    let platform = Planar {
+        x: js.base[0],
+        y: js.base[1],
+        yaw_deg: js.base[2].to_degrees(),
+    }
+    .pose();
+    platform * model.mount * ArmKinematics::new(model, &js.q.into()).tcp
+}
+
+/// A fresh controller and cell on `cell` run for 1 s and stop on request: nothing stale is in
+/// the way after a kill.
+fn restart_works(cell: &str) {
+    let _fw = firmware(cell, 20);
+    let json = dir().join(format!("{cell}-restart.json"));
+    let mut run = run_cell(cell, &json, &["--stop-after", "1"]);
+    assert!(
+        run.wait_for(Duration::from_secs(60)).success(),
+        "restart run failed"
+    );
+    let r = report(&json);
+    assert_eq!(r["stopped"], true, "{r}");
+    assert_eq!(r["lost"], 0, "{r}");
+    assert!(r["fault"].is_null(), "{r}");
+}
+
+/// One task end to end: the part ends at its goal pose (from the measured joint states and
+/// the gripper), no setpoint lost or repeated, every setpoint within the limits, tracking
+/// error within 10 mrad (a tenth of the executor's tracking tolerance).
+#[test]
+fn one_task_end_to_end_places_the_part_at_its_goal() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = cell_name("e2e");
+    let _fw = firmware(&cell, 20);
+    let watch = Watch::start(&cell);
+    let json = dir().join("e2e.json");
+    let mut run = run_cell(&cell, &json, &[]);
+    assert!(
+        run.wait_for(Duration::from_secs(180)).success(),
+        "prf run failed"
+    );
+    let (sp, js) = watch.finish();
+    let r = report(&json);
+    assert_eq!(r["completed"], true, "{r}");
+    assert_eq!(
+        (r["lost"].as_u64(), r["repeated"].as_u64()),
+        (Some(0), Some(0)),
+        "{r}"
+    );
+    assert_eq!(r["rejected"], 0, "{r}");
+    let track = r["max_tracking_error"].as_f64().unwrap();
+    assert!(track <= 1e-2, "tracking error {track} rad");
+
+    // The setpoints as the controller saw them: 1, 2, 3, … and within the limits.
+    let model = RobotModel::kmr_iiwa14();
+    let limits = MotionLimits::kmr_iiwa(&model);
+    assert!(!sp.is_empty());
+    for (i, s) in sp.iter().enumerate() {
+        assert_eq!(s.seq, i as u64 + 1, "sequence");
+        assert_eq!(model.limit_violation(&s.q), None, "seq {}", s.seq);
+        for j in 0..NA {
+            assert!(
+                s.qd[j].abs() <= limits.arm_speed[j],
+                "seq {} A{}",
+                s.seq,
+                j + 1
+            );
+            if i > 0 {
+                let step = (s.q[j] - sp[i - 1].q[j]).abs();
+                assert!(
+                    step <= limits.arm_speed[j] * 1e-3 * (1.0 + 1e-6),
+                    "seq {}",
+                    s.seq
+                );
+            }
+        }
+    }
+    assert_ne!(sp.last().unwrap().flags & flags::LAST, 0);
+    assert_ne!(sp[0].flags & flags::FIRST, 0);
+
+    // The part: held from the state where the gripper closed to where it starts opening.
+    let ft = floor_task();
+    let closed = js
+        .iter()
+        .position(|m| m.gripper >= 0.95)
+        .expect("gripper closed");
+    let opened = closed
+        + js[closed..]
+            .iter()
+            .position(|m| m.gripper < 0.95)
+            .expect("opened");
+    let grip = tcp(&model, &js[closed]).inverse() * ft.part_pose;
+    let placed = tcp(&model, &js[opened]) * grip;
+    let dp = (placed.translation.vector - ft.goal.translation.vector).norm();
+    let da = placed.rotation.angle_to(&ft.goal.rotation);
+    println!(
+        "part placed {:.2} mm, {:.2} mrad from its goal; max tracking error {:.3} mrad; {} setpoints",
+        dp * 1e3,
+        da * 1e3,
+        track * 1e3,
+        sp.len()
+    );
+    // The executor's platform tolerance: 5 mm, 10 mrad.
+    assert!(
+        dp <= 5e-3 && da <= 1e-2,
+        "part {dp} m, {da} rad from its goal"
+    );
+}
+
+/// Killing firmware-sim mid-task: the cell detects it within 10 ms and stops with a fault;
+/// a new controller on the same services then works.
+#[test]
+fn killed_firmware_is_detected_within_10_ms() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = cell_name("kill-fw");
+    let mut fw = firmware(&cell, 20);
+    let watch = Watch::start(&cell);
+    let json = dir().join("kill-fw.json");
+    let mut run = run_cell(&cell, &json, &[]);
+    watch.until(Duration::from_secs(30), |sp, _| sp.len() >= 2000);
+    let killed = now_ns();
+    fw.0.kill().expect("kill firmware-sim");
+    let status = run.wait_for(Duration::from_secs(10));
+    assert!(!status.success(), "the cell must exit with a fault");
+    drop(watch.finish());
+    let r = report(&json);
+    let fault = r["fault"].as_str().expect("fault");
+    assert!(fault.contains("firmware-sim"), "{fault}");
+    let detected = r["fault_t_ns"].as_u64().unwrap();
+    let ms = (detected.saturating_sub(killed)) as f64 * 1e-6;
+    println!("detected in {ms:.2} ms: {fault}");
+    assert!(ms <= 10.0, "detected {ms} ms after the kill");
+    drop(fw);
+    restart_works(&cell);
+}
+
+/// Killing the cell while the arm moves: firmware-sim's watchdog brakes it to standstill
+/// within the speed and acceleration limits; then both restart cleanly.
+#[test]
+fn killed_cell_makes_the_watchdog_brake_within_limits() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = cell_name("kill-cell");
+    let watchdog = 20;
+    let fw = firmware(&cell, watchdog);
+    let watch = Watch::start(&cell);
+    let json = dir().join("kill-cell.json");
+    let mut run = run_cell(&cell, &json, &[]);
+    watch.until(Duration::from_secs(60), |sp, _| {
+        sp.last()
+            .is_some_and(|s| s.mode == mode::ARM && s.qd.iter().any(|v| v.abs() > 0.3))
+    });
+    run.0.kill().expect("kill the cell");
+    std::thread::sleep(Duration::from_millis(1500));
+    let (sp, js) = watch.finish();
+    let last = sp.last().expect("setpoints").t_ns;
+    let after: Vec<&JointStateMsg> = js.iter().filter(|m| m.t_ns > last).collect();
+    let trip = after
+        .iter()
+        .find(|m| m.status & status::WATCHDOG != 0)
+        .expect("watchdog trip");
+    let trip_ms = (trip.t_ns - last) as f64 * 1e-6;
+    assert!(
+        trip_ms <= watchdog as f64 + 5.0,
+        "watchdog after {trip_ms} ms"
+    );
+    let model = RobotModel::kmr_iiwa14();
+    let limits = MotionLimits::kmr_iiwa(&model);
+    let mut peak: f64 = 0.0;
+    for w in after.windows(2) {
+        assert_eq!(w[1].seq, w[0].seq + 1, "joint states are consecutive");
+        assert_eq!(model.limit_violation(&w[1].q), None);
+        for j in 0..NA {
+            assert!(w[1].qd[j].abs() <= limits.arm_speed[j] + 1e-12);
+            let acc = (w[1].qd[j] - w[0].qd[j]).abs() / 1e-3;
+            assert!(
+                acc <= limits.arm_acceleration[j] * (1.0 + 1e-9),
+                "A{} {acc}",
+                j + 1
+            );
+            peak = peak.max(w[0].qd[j].abs());
+        }
+    }
+    let end = after.last().expect("states after the kill");
+    let rest = end.qd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    println!("watchdog after {trip_ms:.1} ms; from {peak:.3} rad/s to {rest:.1e} rad/s");
+    assert!(rest < 1e-4, "arm still moving: {rest} rad/s");
+    drop(fw);
+    restart_works(&cell);
+}
