@@ -1,6 +1,8 @@
 //! `prf`: host tools of the PRF cell runtime.
 
+mod alloc_count;
 mod bench;
+mod bench_cell;
 mod check;
 mod demo;
 mod generate;
@@ -12,6 +14,9 @@ mod run_cmd;
 mod synthetic;
 
 use clap::{Parser, Subcommand};
+
+#[global_allocator]
+static ALLOCATOR: alloc_count::Counting = alloc_count::Counting;
 
 /// PRF — program a robot cell by reusing its old programs.
 ///
@@ -50,6 +55,12 @@ enum Command {
     /// Plan one task and execute it in real time on the host cell (1 kHz, embassy-time, Ruckig
     /// output stage) against firmware-sim over iceoryx2 shared memory.
     Run(run_cmd::Args),
+    /// Host cell figures: setpoint latency through iceoryx2 against a Unix socket, the 1 kHz
+    /// loop's jitter and deadline misses against firmware-sim, Ruckig's per-update cost.
+    BenchCell(bench_cell::Args),
+    /// Receiving side of `prf bench-cell`'s latency comparison.
+    #[command(hide = true)]
+    IpcPeer(bench_cell::PeerArgs),
     /// The simulated iiwa joint controller (same as the `prf-firmware-sim` binary).
     FirmwareSim(prf_firmware_sim::cli::Args),
 }
@@ -66,6 +77,8 @@ fn main() -> anyhow::Result<()> {
         Some(Command::Inspect(args)) => learn_cmd::inspect(&args),
         Some(Command::Plan(args)) => plan_cmd::run(&args),
         Some(Command::Run(args)) => run_cmd::run(&args),
+        Some(Command::BenchCell(args)) => bench_cell::run(&args),
+        Some(Command::IpcPeer(args)) => bench_cell::peer(&args),
         Some(Command::FirmwareSim(args)) => prf_firmware_sim::cli::run(&args),
     }
 }
