@@ -105,3 +105,17 @@ pub struct JointStateMsg {
     pub repeated: u32,
     pub rejected: u32,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The layout two separately built binaries rely on: fixed sizes, 8-byte alignment.
+    #[test]
+    fn message_layout_is_fixed() {
+        assert_eq!(core::mem::size_of::<SetpointMsg>(), 160);
+        assert_eq!(core::mem::size_of::<JointStateMsg>(), 200);
+        assert_eq!(core::mem::align_of::<SetpointMsg>(), 8);
+        assert_eq!(core::mem::align_of::<JointStateMsg>(), 8);
+    }
+}
