@@ -16,6 +16,7 @@ use prf_shared::NA;
 use prf_shared::ipc::{JointStateMsg, SetpointMsg, flags, status};
 use prf_shared::limits::MotionLimits;
 use prf_shared::robot::RobotModel;
+use prf_shared::se3::wrap;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -163,16 +164,6 @@ impl Plant {
     fn base_pose(&self) -> [f64; 3] {
         let p = self.base.current().0;
         [p[0], p[1], wrap(p[2])]
-    }
-}
-
-/// Wraps an angle to (−π, π].
-fn wrap(a: f64) -> f64 {
-    let r = a.rem_euclid(2.0 * std::f64::consts::PI);
-    if r > std::f64::consts::PI {
-        r - 2.0 * std::f64::consts::PI
-    } else {
-        r
     }
 }
 

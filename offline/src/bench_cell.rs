@@ -9,7 +9,7 @@ use crate::alloc_count::allocations;
 use crate::run_cmd::{ChildGuard, spawn_firmware, summary};
 use anyhow::{Context, Result, anyhow, bail};
 use prf_firmware_sim::clock::now_ns;
-use prf_firmware_sim::link::{self, Ipc};
+use prf_firmware_sim::link;
 use prf_firmware_sim::motion::Online;
 use prf_offline::cell::stats::percentiles;
 use prf_offline::cell::{Cell, CellConfig, TRACKING_GAIN};
@@ -165,7 +165,6 @@ fn latency(transport: &str, n: u64) -> Result<[f64; 5]> {
         .map(|x| x.parse::<f64>())
         .collect::<Result<_, _>>()?;
     let _ = std::fs::remove_file(&name);
-    let _node: &iceoryx2::node::Node<Ipc> = &node;
     match v[..] {
         [c, a, b, d, e] => Ok([c, a, b, d, e]),
         _ => bail!("peer printed {line:?}"),

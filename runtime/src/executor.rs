@@ -147,16 +147,7 @@ pub fn planar(p: &Pose) -> [f64; 3] {
     [p.translation.x, p.translation.y, yaw]
 }
 
-/// Wraps an angle to (−π, π].
-pub fn wrap(a: f64) -> f64 {
-    let two_pi = 2.0 * core::f64::consts::PI;
-    let r = a - two_pi * libm::floor((a + core::f64::consts::PI) / two_pi);
-    if r <= -core::f64::consts::PI {
-        r + two_pi
-    } else {
-        r
-    }
-}
+pub use prf_shared::se3::wrap;
 
 /// The executor of one program.
 pub struct Executor<'r, 'a> {

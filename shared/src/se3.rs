@@ -11,6 +11,17 @@ pub type Pose = Isometry3<f64>;
 /// A rotation.
 pub type Rot = UnitQuaternion<f64>;
 
+/// Wraps an angle to (−π, π].
+pub fn wrap(a: f64) -> f64 {
+    let two_pi = 2.0 * core::f64::consts::PI;
+    let r = a - two_pi * libm::floor((a + core::f64::consts::PI) / two_pi);
+    if r <= -core::f64::consts::PI {
+        r + two_pi
+    } else {
+        r
+    }
+}
+
 /// Pose from URDF `xyz` and `rpy` (R = Rz(yaw) · Ry(pitch) · Rx(roll)).
 pub fn pose_from_xyz_rpy(xyz: [f64; 3], rpy: [f64; 3]) -> Pose {
     Isometry3::from_parts(

@@ -11,7 +11,7 @@
 pub mod pacing;
 pub mod stats;
 
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Result, bail};
 use embassy_time::{Duration, Instant, Ticker};
 use prf_firmware_sim::clock::now_ns;
 use prf_firmware_sim::link::{self, CellPorts, Ipc};
@@ -270,9 +270,4 @@ impl Cell {
         report.latency_us = stats::percentiles(&mut latency);
         Ok(report)
     }
-}
-
-/// Formats a report's fault for error messages.
-pub fn fault_of(r: &CellReport) -> anyhow::Error {
-    anyhow!(r.fault.clone().unwrap_or_else(|| "incomplete".into()))
 }
