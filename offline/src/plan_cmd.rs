@@ -32,6 +32,10 @@ pub struct Args {
     /// Write the program at 1 kHz, executed on an ideal cell, as a dataset trajectory CSV.
     #[arg(long)]
     pub export: Option<PathBuf>,
+    /// Write the task as a task block (for the cell-controller firmware: flash it at the TASK
+    /// region, 0x003F0000 on mps2-an500).
+    #[arg(long, conflicts_with = "all")]
+    pub task_block: Option<PathBuf>,
     /// Floor plan (world file) with the location poses and the platform's home; default: the
     /// built-in example cell. Its obstacles are not read.
     #[arg(long)]
@@ -66,6 +70,13 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         bail!("--part, --from and --to are required without --all");
     };
     let ft = FloorTask::new(&world, part, from, to)?;
+    if let Some(path) = &a.task_block {
+        let mut buf = [0u8; 1024];
+        let n = prf_runtime::task_block::encode(&ft.task(), &mut buf)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        std::fs::write(path, &buf[..n]).with_context(|| format!("writing {}", path.display()))?;
+        println!("task block: {n} B written to {}", path.display());
+    }
     let t0 = Instant::now();
     let result = plan(&rt, &ft.task());
     let took = t0.elapsed().as_secs_f64();

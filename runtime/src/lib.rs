@@ -3,19 +3,24 @@
 //!
 //! - [`load`]: [`Runtime::load`] validates a blob and reads it in place;
 //! - [`task`]: the task T and its symbolic feasibility (Sec. 6.1);
+//! - [`task_block`]: a task as bytes (for a controller that reads it from flash);
 //! - [`task_plan`]: forward search over the blob's action templates;
 //! - [`skill_plan`]: SkillPlan-PTT (Alg. 4), decomposed and pruned;
 //! - [`plan`]: all of the above in order, giving a [`plan::Plan`] and its [`program::Program`];
-//! - [`executor`]: the 1 kHz state machine, with [`reverse`] for the reversed arm motions.
+//! - [`executor`]: the 1 kHz state machine, with [`reverse`] for the reversed arm motions;
+//! - [`ideal`]: an ideal cell (exact arm, fixed-rate gripper and platform) to run programs
+//!   against without hardware.
 #![no_std]
 
 pub mod executor;
+pub mod ideal;
 pub mod load;
 pub mod plan;
 pub mod program;
 pub mod reverse;
 pub mod skill_plan;
 pub mod task;
+pub mod task_block;
 pub mod task_plan;
 
 pub use executor::{Executor, ExecutorConfig, Fault, Measured, Mode, Setpoint};

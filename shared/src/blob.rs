@@ -503,18 +503,21 @@ pub struct Blob<'a> {
 impl<'a> Blob<'a> {
     /// Checks header, version, length and CRC, decodes the payload and validates every
     /// record once, so later accesses cannot find anything malformed.
-    pub fn parse(bytes: &'a [u8]) -> Result<Self, BlobError> {
-        if bytes.len() < HEADER_LEN {
+    /// The whole length (header + payload) the header at the start of `region` declares,
+    /// after checking its magic and version: how much of a larger region (the flash region
+    /// the blob was written to) is the blob.
+    pub fn stored_len(region: &[u8]) -> Result<usize, BlobError> {
+        if region.len() < HEADER_LEN {
             return Err(BlobError::Truncated {
                 needed: HEADER_LEN,
-                got: bytes.len(),
+                got: region.len(),
             });
         }
-        if bytes[..8] != MAGIC {
+        if region[..8] != MAGIC {
             return Err(BlobError::BadMagic);
         }
         let u32_at =
-            |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
+            |i: usize| u32::from_le_bytes([region[i], region[i + 1], region[i + 2], region[i + 3]]);
         let version = u32_at(8);
         if version != VERSION {
             return Err(BlobError::Version {
@@ -522,8 +525,13 @@ impl<'a> Blob<'a> {
                 supported: VERSION,
             });
         }
-        let len = u32_at(12) as usize;
-        let total = HEADER_LEN.saturating_add(len);
+        Ok(HEADER_LEN.saturating_add(u32_at(12) as usize))
+    }
+
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, BlobError> {
+        let total = Self::stored_len(bytes)?;
+        let u32_at =
+            |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
         if bytes.len() < total {
             return Err(BlobError::Truncated {
                 needed: total,
