@@ -118,6 +118,27 @@ fn event(
         .map_err(|e| anyhow!("service {name}: {e:?}"))
 }
 
+/// Sends one message (loan a sample in shared memory, write it, publish it).
+fn send<T: core::fmt::Debug + ZeroCopySend>(p: &Publisher<Ipc, T, ()>, msg: T) -> Result<()> {
+    let sample = p.loan_uninit().map_err(|e| anyhow!("loan: {e:?}"))?;
+    sample
+        .write_payload(msg)
+        .send()
+        .map_err(|e| anyhow!("send: {e:?}"))?;
+    Ok(())
+}
+
+/// Hands every message received since the last call to `f`, oldest first.
+fn drain<T: core::fmt::Debug + ZeroCopySend + Copy>(
+    s: &Subscriber<Ipc, T, ()>,
+    mut f: impl FnMut(T),
+) -> Result<()> {
+    while let Some(sample) = s.receive().map_err(|e| anyhow!("receive: {e:?}"))? {
+        f(*sample);
+    }
+    Ok(())
+}
+
 /// The cell's ports: publishes setpoints and wakes the controller, reads joint states.
 pub struct CellPorts {
     pub setpoint: Publisher<Ipc, SetpointMsg, ()>,
@@ -139,14 +160,7 @@ impl CellPorts {
 
     /// Sends one setpoint and wakes the controller.
     pub fn send(&self, msg: SetpointMsg) -> Result<()> {
-        let sample = self
-            .setpoint
-            .loan_uninit()
-            .map_err(|e| anyhow!("loan: {e:?}"))?;
-        sample
-            .write_payload(msg)
-            .send()
-            .map_err(|e| anyhow!("send: {e:?}"))?;
+        send(&self.setpoint, msg)?;
         self.ready.notify().map_err(|e| anyhow!("notify: {e:?}"))?;
         Ok(())
     }
@@ -154,13 +168,7 @@ impl CellPorts {
     /// The newest joint state received since the last call, if any.
     pub fn newest(&self) -> Result<Option<JointStateMsg>> {
         let mut newest = None;
-        while let Some(s) = self
-            .joint_state
-            .receive()
-            .map_err(|e| anyhow!("receive: {e:?}"))?
-        {
-            newest = Some(*s);
-        }
+        drain(&self.joint_state, |m| newest = Some(m))?;
         Ok(newest)
     }
 }
@@ -185,15 +193,7 @@ impl ControllerPorts {
     }
 
     pub fn publish(&self, msg: JointStateMsg) -> Result<()> {
-        let sample = self
-            .joint_state
-            .loan_uninit()
-            .map_err(|e| anyhow!("loan: {e:?}"))?;
-        sample
-            .write_payload(msg)
-            .send()
-            .map_err(|e| anyhow!("send: {e:?}"))?;
-        Ok(())
+        send(&self.joint_state, msg)
     }
 }
 
@@ -213,20 +213,7 @@ impl Observer {
 
     /// Moves every message received since the last call into the two lists.
     pub fn drain(&self, sp: &mut Vec<SetpointMsg>, js: &mut Vec<JointStateMsg>) -> Result<()> {
-        while let Some(s) = self
-            .setpoint
-            .receive()
-            .map_err(|e| anyhow!("receive: {e:?}"))?
-        {
-            sp.push(*s);
-        }
-        while let Some(s) = self
-            .joint_state
-            .receive()
-            .map_err(|e| anyhow!("receive: {e:?}"))?
-        {
-            js.push(*s);
-        }
-        Ok(())
+        drain(&self.setpoint, |m| sp.push(m))?;
+        drain(&self.joint_state, |m| js.push(m))
     }
 }
