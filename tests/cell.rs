@@ -216,7 +216,7 @@ fn tcp(model: &RobotModel, js: &JointStateMsg) -> Pose {
 /// A fresh controller and cell on `cell` run for 1 s and stop on request: nothing stale is in
 /// the way after a kill.
 fn restart_works(cell: &str) {
-    let _fw = firmware(cell, 20);
+    let _fw = firmware(cell, 100);
     let json = dir().join(format!("{cell}-restart.json"));
     let mut run = run_cell(cell, &json, &["--stop-after", "1"]);
     assert!(
@@ -236,7 +236,7 @@ fn restart_works(cell: &str) {
 fn one_task_end_to_end_places_the_part_at_its_goal() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = cell_name("e2e");
-    let _fw = firmware(&cell, 20);
+    let _fw = firmware(&cell, 100);
     let watch = Watch::start(&cell);
     let json = dir().join("e2e.json");
     let mut run = run_cell(&cell, &json, &[]);
@@ -318,7 +318,7 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
 fn killed_firmware_is_detected_within_10_ms() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = cell_name("kill-fw");
-    let mut fw = firmware(&cell, 20);
+    let mut fw = firmware(&cell, 100);
     let watch = Watch::start(&cell);
     let json = dir().join("kill-fw.json");
     let mut run = run_cell(&cell, &json, &[]);
@@ -345,7 +345,7 @@ fn killed_firmware_is_detected_within_10_ms() {
 fn killed_cell_makes_the_watchdog_brake_within_limits() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let cell = cell_name("kill-cell");
-    let watchdog = 20;
+    let watchdog = 50;
     let fw = firmware(&cell, watchdog);
     let watch = Watch::start(&cell);
     let json = dir().join("kill-cell.json");

@@ -20,7 +20,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1.0)]
     pub damping: f64,
     /// Silent cycles (1 ms each) before the watchdog brakes the arm to standstill.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 100)]
     pub watchdog: u32,
     /// Gripper open → closed time, s.
     #[arg(long, default_value_t = 0.6)]

@@ -44,7 +44,7 @@ impl Config {
         Config {
             cell: cell.to_string(),
             servo: ServoConfig::default(),
-            watchdog_cycles: 20,
+            watchdog_cycles: 100,
             gripper_time: 0.6,
             base: [0.0; 3],
             log: std::env::temp_dir().join(format!("prf-firmware-sim-{cell}.log")),
@@ -195,7 +195,7 @@ pub fn run(cfg: &Config) -> Result<Summary> {
         .map_err(|e| anyhow::anyhow!("waitset attach: {e:?}"))?;
     let log_file = std::fs::File::create(&cfg.log)
         .with_context(|| format!("creating the log {}", cfg.log.display()))?;
-    let mut log = std::io::BufWriter::new(log_file);
+    let mut log = std::io::BufWriter::with_capacity(1 << 16, log_file);
     writeln!(
         log,
         "# prf firmware-sim, cell {:?}, servo {:.1} Hz ζ {:.2}, watchdog {} cycles, gripper {:.2} s",

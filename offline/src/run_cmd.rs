@@ -37,7 +37,7 @@ pub struct Args {
     #[arg(long, default_value_t = 3.0)]
     pub dead_after: f64,
     /// Milliseconds without a joint state before the cell stops with a fault regardless.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 100.0)]
     pub silent_after: f64,
     /// Brake and end the run after this many seconds.
     #[arg(long)]

@@ -52,7 +52,7 @@ impl CellConfig {
             cell: cell.to_string(),
             executor: ExecutorConfig::default(),
             dead_after_ms: 3.0,
-            silent_after_ms: 20.0,
+            silent_after_ms: 100.0,
             connect_timeout: std::time::Duration::from_secs(5),
             stop_after: None,
         }
@@ -145,9 +145,11 @@ impl Cell {
         let l = &self.limits;
         let mut out = Online::new(&self.last.q, &l.arm_speed, &l.arm_acceleration, &l.arm_jerk);
         let period = Duration::from_hz(1000);
-        // At most 10 minutes of timing samples, allocated before the loop.
+        // At most 10 minutes of timing samples, allocated and touched before the loop (no
+        // page faults inside it).
         let cap = 600_000;
-        let (mut late, mut latency) = (Vec::with_capacity(cap), Vec::with_capacity(cap));
+        let (mut late, mut latency) = (vec![0.0f64; cap], vec![0.0f64; cap]);
+        let (mut n_late, mut n_latency) = (0usize, 0usize);
         let mut report = CellReport::default();
         let parker = pacing::Parker::new();
         let mut last_rx = std::time::Instant::now();
@@ -161,8 +163,9 @@ impl Cell {
             k += 1;
             let scheduled = t0 + period * k as u32;
             let woke = Instant::now();
-            if late.len() < cap {
-                late.push(woke.saturating_duration_since(scheduled).as_micros() as f64);
+            if n_late < cap {
+                late[n_late] = woke.saturating_duration_since(scheduled).as_micros() as f64;
+                n_late += 1;
             }
             if let Some(js) = self.ports.newest()? {
                 self.last = js;
@@ -174,8 +177,9 @@ impl Cell {
             let js = self.last;
             if js.setpoint_seq > seen_sp && js.setpoint_seq <= k {
                 seen_sp = js.setpoint_seq;
-                if latency.len() < cap {
-                    latency.push(js.setpoint_latency_ns as f64 * 1e-3);
+                if n_latency < cap {
+                    latency[n_latency] = js.setpoint_latency_ns as f64 * 1e-3;
+                    n_latency += 1;
                 }
                 report.max_tracking_error = report.max_tracking_error.max(js.tracking_error);
                 (report.lost, report.repeated, report.rejected) =
@@ -266,8 +270,8 @@ impl Cell {
         }
         report.ticks = k;
         report.duration_s = k as f64 * 1e-3;
-        report.wake_late_us = stats::percentiles(&mut late);
-        report.latency_us = stats::percentiles(&mut latency);
+        report.wake_late_us = stats::percentiles(&mut late[..n_late]);
+        report.latency_us = stats::percentiles(&mut latency[..n_latency]);
         Ok(report)
     }
 }
