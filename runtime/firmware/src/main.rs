@@ -3,9 +3,9 @@
 //! It reads the blob (BLOB region) and a task block (TASK region) in place, validates both,
 //! plans the task, executes the whole program tick by tick against the runtime's ideal cell,
 //! and prints over semihosting: a digest of the setpoint stream (every 1000th setpoint and the
-//! last, full precision), the SysTick counts of planning and of every tick (deterministic
-//! under `qemu-system-arm -icount shift=0`; their factor to instructions is not yet
-//! calibrated), and RAM use (data + bss + the stack's high-water mark). It exits with a status; any exception exits with a message.
+//! last, full precision), the instructions of planning and of every tick (SysTick under
+//! `qemu-system-arm -icount shift=0`, calibrated at start; resolution 40 instructions), and RAM
+//! use (data + bss + the stack's high-water mark). It exits with a status; any exception exits with a message.
 #![no_std]
 #![no_main]
 
@@ -99,11 +99,29 @@ fn main() -> ! {
     cp.SYST.clear_current();
     cp.SYST.enable_interrupt();
     cp.SYST.enable_counter();
+    // The first reload happens on the first count: wait for it, so counts are monotonic.
+    while cortex_m::peripheral::SYST::get_current() == 0 {}
     run(stack_top, paint_bottom)
+}
+
+/// Instructions per SysTick count: under `-icount shift=0` each instruction takes 1 ns of
+/// virtual time and SysTick runs at the board's 25 MHz, so 40; measured here on a loop of
+/// exactly 2 instructions per iteration rather than assumed.
+fn instructions_per_count() -> u64 {
+    let n: u32 = 1_000_000;
+    let c = cycles();
+    // SAFETY: a register-only countdown loop.
+    unsafe {
+        core::arch::asm!("2:", "subs {0}, {0}, #1", "bne 2b", inout(reg) n => _, options(nomem, nostack));
+    }
+    let counts = (cycles() - c).max(1);
+    (2 * n as u64 + counts / 2) / counts
 }
 
 #[inline(never)]
 fn run(stack_top: usize, paint_bottom: usize) -> ! {
+    let k = instructions_per_count();
+    hprintln!("SysTick: {} instructions per count (calibrated)", k);
     let blob_region = region(&raw const _blob_start, &raw const _blob_end);
     let bytes = match prf_shared::blob::Blob::stored_len(blob_region)
         .ok()
@@ -138,7 +156,11 @@ fn run(stack_top: usize, paint_bottom: usize) -> ! {
                 exit(4);
             }
         };
-    hprintln!("blob {} B valid; load {} SysTick counts", bytes.len(), load);
+    hprintln!(
+        "blob {} B valid; load {} instructions",
+        bytes.len(),
+        load * k
+    );
     hprintln!("task {} {} -> {}", task.part.id, task.from.id, task.to.id);
     let t1 = cycles();
     let p = match plan(&rt, &task) {
@@ -150,11 +172,11 @@ fn run(stack_top: usize, paint_bottom: usize) -> ! {
     };
     let planning = cycles() - t1;
     hprintln!(
-        "plan J* {:.6e} feasible {} integrations {} SysTick counts {}",
+        "plan J* {:.6e} feasible {} integrations {} instructions {}",
         p.skills.j,
         p.skills.feasible,
         p.skills.stats.integrations,
-        planning
+        planning * k
     );
     let Some(program) = p.program else {
         hprintln!("prf-firmware: no program");
@@ -208,10 +230,10 @@ fn run(stack_top: usize, paint_bottom: usize) -> ! {
     let bss = &raw const __ebss as usize - &raw const __sbss as usize;
     let stack = stack_used(paint_bottom, stack_top);
     hprintln!(
-        "ticks {} max {} mean {} SysTick counts; done {}",
+        "ticks {} max {} mean {} instructions; done {}",
         n,
-        max,
-        sum / n.max(1),
+        max * k,
+        sum * k / n.max(1),
         done
     );
     hprintln!(
