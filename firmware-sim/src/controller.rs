@@ -65,6 +65,8 @@ struct Plant {
     gripper: f64,
     close: bool,
     brake: Option<Online>,
+    /// The brake trajectory reached standstill (Ruckig finished).
+    braked: bool,
     limits: MotionLimits,
     gripper_rate: f64,
 }
@@ -91,6 +93,7 @@ impl Plant {
             gripper: 0.0,
             close: false,
             brake: None,
+            braked: false,
             limits,
             gripper_rate: 1.0 / cfg.gripper_time.max(1e-3),
         }
@@ -140,7 +143,7 @@ impl Plant {
     /// One cycle of everything.
     fn step(&mut self) -> Result<()> {
         if let Some(b) = self.brake.as_mut() {
-            b.step()?;
+            self.braked = b.step()?;
             for j in 0..NA {
                 self.q_ref[j] = b.position()[j];
                 self.qd_ref[j] = b.velocity()[j];
@@ -210,7 +213,8 @@ pub fn run(cfg: &Config) -> Result<Summary> {
     let mut guard = Guard::default();
     let mut summary = Summary::default();
     let mut active = false;
-    let mut stopped: Option<&'static str> = None; // watchdog / refusal latched until FIRST
+    // Watchdog or refusal: latched (setpoints ignored, arm braked) until the next FIRST.
+    let mut halted = false;
     let mut state_bits = 0u32;
     let mut last_setpoint = Instant::now();
     let mut next = Instant::now() + Duration::from_millis(1);
@@ -281,8 +285,9 @@ pub fn run(cfg: &Config) -> Result<Summary> {
             }
             if sp.flags & flags::FIRST != 0 {
                 active = true;
-                stopped = None;
+                halted = false;
                 plant.brake = None;
+                plant.braked = false;
                 summary.sessions += 1;
                 state_bits = status::ACTIVE;
                 writeln!(log, "{:.3} session start", t(start))?;
@@ -290,7 +295,7 @@ pub fn run(cfg: &Config) -> Result<Summary> {
             let admission = guard.admit(&sp, &plant.q_ref, &model, &limits, DT);
             summary.setpoints += 1;
             match admission {
-                Admission::Follow if stopped.is_none() => plant.follow(&sp),
+                Admission::Follow if !halted => plant.follow(&sp),
                 Admission::Follow => {}
                 Admission::Repeated => continue,
                 Admission::Refuse(r) => {
@@ -301,7 +306,7 @@ pub fn run(cfg: &Config) -> Result<Summary> {
                         sp.seq
                     )?;
                     log.flush()?;
-                    stopped = Some("refused");
+                    halted = true;
                     state_bits |= status::REJECTED | status::BRAKING;
                     plant.start_brake();
                 }
@@ -353,7 +358,7 @@ pub fn run(cfg: &Config) -> Result<Summary> {
             continue;
         }
         // A cycle without a setpoint.
-        if active && stopped.is_none() {
+        if active && !halted {
             let silent = (now - last_setpoint).as_secs_f64() / DT;
             if silent >= cfg.watchdog_cycles as f64 {
                 writeln!(
@@ -365,7 +370,7 @@ pub fn run(cfg: &Config) -> Result<Summary> {
                 )?;
                 log.flush()?;
                 summary.watchdog_trips += 1;
-                stopped = Some("watchdog");
+                halted = true;
                 state_bits |= status::WATCHDOG | status::BRAKING;
                 plant.start_brake();
             } else {
@@ -373,12 +378,7 @@ pub fn run(cfg: &Config) -> Result<Summary> {
             }
         }
         plant.step()?;
-        if plant
-            .brake
-            .as_ref()
-            .is_some_and(|b| b.velocity().iter().all(|v| *v == 0.0))
-            && state_bits & status::BRAKING != 0
-        {
+        if plant.braked && state_bits & status::BRAKING != 0 {
             state_bits &= !status::BRAKING;
             writeln!(log, "{:.3} standstill", t(start))?;
             log.flush()?;

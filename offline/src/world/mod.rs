@@ -75,11 +75,8 @@ pub struct Planar {
     pub yaw_deg: f64,
 }
 
-/// [x, y, yaw (rad)] of a pose on the floor (its rotation taken about z).
-pub fn planar(p: &Pose) -> [f64; 3] {
-    let (_, _, yaw) = p.rotation.euler_angles();
-    [p.translation.x, p.translation.y, yaw]
-}
+/// [x, y, yaw (rad)] of a pose on the floor: the runtime's, one definition for both.
+pub use prf_runtime::executor::planar;
 
 impl Planar {
     pub fn pose(&self) -> Pose {
