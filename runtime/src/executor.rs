@@ -1,11 +1,17 @@
 //! The executor: a state machine over a program's segments, ticked once per Δt = 1 ms.
 //!
-//! `tick(now, measured)` does bounded work (at most one RDMP step, Alg. 2, and one segment
-//! transition), allocates nothing and cannot panic. Arm segments integrate the planned RDMP
-//! one step per tick from the previous setpoint (open loop in the measured state, so the
-//! executed trajectory is exactly the planned one); the reversal replays it backwards
-//! ([`crate::reverse`]); gripper and platform segments command and wait for the measured
-//! state, with timeouts. A fault (timeout, tracking error, non-finite input, clock going
+//! `tick(now, measured)` does bounded work (at most one RDMP step, Alg. 2, or one unit of an
+//! arm segment's preparation, and one segment transition), allocates nothing and cannot
+//! panic. Arm segments integrate the planned RDMP one step per tick from the previous setpoint
+//! (open loop in the measured state, so the executed trajectory is exactly the planned one);
+//! the reversal replays it backwards ([`crate::reverse`]); gripper and platform segments
+//! command and wait for the measured state, with timeouts.
+//!
+//! Preparing an arm segment (decoding its RDMP from the blob, then starting the run) costs
+//! several RDMP steps, so it is split into two units of one tick each, done ahead during the
+//! platform and gripper segments before it, where the arm holds still and ticks are cheap. An
+//! arm segment that could not be prepared ahead holds the arm for its first two ticks. A
+//! reversal's first resume is likewise done ahead ([`Reversal::prepare`]). A fault (timeout, tracking error, non-finite input, clock going
 //! backwards) moves the executor to `Fault`, which holds the last safe setpoint at rest and
 //! says why.
 
@@ -158,7 +164,10 @@ pub struct Executor<'r, 'a> {
     segment: usize,
     /// When the current segment was entered (None: not yet).
     entered: Option<Instant>,
-    rdmp: Option<Rdmp>,
+    /// The arm segment whose RDMP `rdmp` is (and, once started, whose `run` is); `rdmp` is
+    /// meaningless while None.
+    prepared: Option<usize>,
+    rdmp: Rdmp,
     run: Option<RdmpRun>,
     last: Setpoint,
     fault: Option<Fault>,
@@ -191,7 +200,8 @@ impl<'r, 'a> Executor<'r, 'a> {
             reversal,
             segment: 0,
             entered: None,
-            rdmp: None,
+            prepared: None,
+            rdmp: Rdmp::empty(),
             run: None,
             last,
             fault: None,
@@ -233,6 +243,71 @@ impl<'r, 'a> Executor<'r, 'a> {
         self.entered = None;
     }
 
+    /// One unit of preparing arm segment `i` from the arm's current setpoint: decode its RDMP,
+    /// or else start its run. True when the segment is ready to step (no work done then).
+    fn prepare(&mut self, i: usize) -> Result<bool, Fault> {
+        let segment = i as u8;
+        let Some(Segment::Arm { skill, goal, steps }) = self.program.segments.get(i).copied()
+        else {
+            return Err(Fault::Program { segment });
+        };
+        if self.prepared != Some(i) {
+            self.prepared = None;
+            self.run = None;
+            let has = self
+                .rt
+                .skill_rdmp_into(skill as usize, &mut self.rdmp)
+                .map_err(Fault::Load)?;
+            if !has {
+                return Err(Fault::Program { segment });
+            }
+            self.prepared = Some(i);
+            return Ok(false);
+        }
+        if self.run.is_some() {
+            return Ok(true);
+        }
+        let q0 = JointVector::from(self.last.arm);
+        let run = RdmpRun::new(&self.rt.model, &self.rdmp, &q0, &goal, &self.rt.config.rdmp)
+            .map_err(|error| Fault::Rdmp { segment, error })?;
+        self.reversal
+            .begin(steps as usize)
+            .map_err(|error| Fault::Reverse { segment, error })?;
+        self.run = Some(run);
+        Ok(false)
+    }
+
+    /// During a platform or gripper segment (the arm holds still): one unit of preparing the
+    /// next arm motion, if only platform and gripper segments come before it (an arm segment:
+    /// [`Executor::prepare`]; a reversal: its first resume, [`Reversal::prepare`]).
+    fn prepare_ahead(&mut self) -> Result<(), Fault> {
+        let later = self.program.segments.get(self.segment + 1..).unwrap_or(&[]);
+        let Some(k) = later
+            .iter()
+            .position(|s| !matches!(s, Segment::Base { .. } | Segment::Grip { .. }))
+        else {
+            return Ok(());
+        };
+        let i = self.segment + 1 + k;
+        match later.get(k) {
+            Some(Segment::Arm { .. }) => {
+                self.prepare(i)?;
+            }
+            Some(Segment::Reverse { .. }) => {
+                if self.prepared.is_some() {
+                    self.reversal
+                        .prepare(&self.rdmp, &self.rt.config.rdmp)
+                        .map_err(|error| Fault::Reverse {
+                            segment: i as u8,
+                            error,
+                        })?;
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
     fn advance(&mut self, now: Instant, m: &Measured, sp: &mut Setpoint) -> Result<(), Fault> {
         let finite = m.arm.iter().chain(&m.base).all(|v| v.is_finite()) && m.gripper.is_finite();
         if !finite {
@@ -270,6 +345,7 @@ impl<'r, 'a> Executor<'r, 'a> {
                 let (dx, dy) = (m.base[0] - g[0], m.base[1] - g[1]);
                 let there = libm::sqrt(dx * dx + dy * dy) <= self.cfg.base_position_tolerance
                     && libm::fabs(wrap(m.base[2] - g[2])) <= self.cfg.base_yaw_tolerance;
+                self.prepare_ahead()?;
                 if there {
                     self.finish_segment();
                 } else if waited > self.cfg.base_timeout {
@@ -285,40 +361,25 @@ impl<'r, 'a> Executor<'r, 'a> {
                 } else {
                     m.gripper <= self.cfg.gripper_open
                 };
+                self.prepare_ahead()?;
                 if there {
                     self.finish_segment();
                 } else if waited > self.cfg.gripper_timeout {
                     return Err(Fault::Timeout { segment: index });
                 }
             }
-            Segment::Arm { skill, goal, steps } => {
+            Segment::Arm { .. } => {
                 sp.mode = Mode::Arm;
-                let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
-                if self.run.is_none() {
-                    let rdmp = self
-                        .rt
-                        .skill_rdmp(skill as usize)
-                        .map_err(Fault::Load)?
-                        .ok_or(Fault::Program { segment: index })?;
-                    let q0 = JointVector::from(self.last.arm);
-                    let run = RdmpRun::new(model, &rdmp, &q0, &goal, cfg).map_err(|error| {
-                        Fault::Rdmp {
-                            segment: index,
-                            error,
-                        }
-                    })?;
-                    self.reversal
-                        .begin(steps as usize)
-                        .map_err(|error| Fault::Reverse {
-                            segment: index,
-                            error,
-                        })?;
-                    self.rdmp = Some(rdmp);
-                    self.run = Some(run);
+                if !self.prepare(self.segment)? {
+                    // Not prepared ahead: hold the arm while preparing.
+                    sp.arm_velocity = [0.0; NA];
+                    return Ok(());
                 }
-                let (Some(run), Some(rdmp)) = (self.run.as_mut(), self.rdmp.as_ref()) else {
+                let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
+                let Some(run) = self.run.as_mut() else {
                     return Err(Fault::Program { segment: index });
                 };
+                let rdmp = &self.rdmp;
                 self.reversal.record(run);
                 let step = run.step(model, rdmp, cfg).map_err(|error| Fault::Rdmp {
                     segment: index,
@@ -327,17 +388,19 @@ impl<'r, 'a> Executor<'r, 'a> {
                 sp.arm = step.q.into();
                 sp.arm_velocity = step.qd.into();
                 if run.finished() {
-                    self.run = None;
+                    if let Some(run) = self.run.take() {
+                        self.reversal.adopt(run);
+                    }
                     self.finish_segment();
                 }
             }
             Segment::Reverse { .. } => {
                 sp.mode = Mode::Arm;
                 let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
-                let rdmp = self
-                    .rdmp
-                    .as_ref()
-                    .ok_or(Fault::Program { segment: index })?;
+                if self.prepared.is_none() {
+                    return Err(Fault::Program { segment: index });
+                }
+                let rdmp = &self.rdmp;
                 let q = self
                     .reversal
                     .next(model, rdmp, cfg)

@@ -8,6 +8,7 @@
 //! - [`skill_plan`]: SkillPlan-PTT (Alg. 4), decomposed and pruned;
 //! - [`plan`]: all of the above in order, giving a [`plan::Plan`] and its [`program::Program`];
 //! - [`executor`]: the 1 kHz state machine, with [`reverse`] for the reversed arm motions;
+//! - [`stream`]: a setpoint as a fixed-size record (firmware → host comparison);
 //! - [`ideal`]: an ideal cell (exact arm, fixed-rate gripper and platform) to run programs
 //!   against without hardware.
 #![no_std]
@@ -19,6 +20,7 @@ pub mod plan;
 pub mod program;
 pub mod reverse;
 pub mod skill_plan;
+pub mod stream;
 pub mod task;
 pub mod task_block;
 pub mod task_plan;

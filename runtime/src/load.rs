@@ -134,4 +134,16 @@ impl<'a> Runtime<'a> {
             None => Ok(None),
         }
     }
+
+    /// [`Runtime::skill_rdmp`] into `out`, without moving the RDMP; false if the skill has
+    /// none.
+    pub fn skill_rdmp_into(&self, k: usize, out: &mut Rdmp) -> Result<bool, LoadError> {
+        match self.blob.skill(k)?.rdmp {
+            Some(r) => {
+                self.blob.rdmp_into(r as usize, out)?;
+                Ok(true)
+            }
+            None => Ok(false),
+        }
+    }
 }

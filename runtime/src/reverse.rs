@@ -9,6 +9,12 @@
 //! checkpoint is bit-identical, so the reversed motion visits exactly the forward
 //! configurations (and therefore has exactly the planned risk). RAM: two blocks of
 //! configurations and the checkpoints, independent of the per-tick work (one step).
+//!
+//! Resuming from a checkpoint costs about as much as a step, so it is done in a tick without
+//! one: the tick that completes a block's re-integration starts the next block's, and
+//! [`Reversal::prepare`] starts the first one ahead (during the gripper segment before the
+//! reversal). Resumes keep the bases of the forward run ([`Reversal::adopt`],
+//! [`RdmpRun::resume_from`]).
 
 use prf_shared::rdmp::{Rdmp, RdmpCheckpoint, RdmpConfig, RdmpError, RdmpRun};
 use prf_shared::robot::RobotModel;
@@ -30,7 +36,14 @@ pub struct Reversal {
     /// Backward tick i (emits q_{n−1−i}).
     i: usize,
     /// Re-integration of the block after the one playing.
-    refill: Option<(RdmpRun, usize)>,
+    refill: Option<Refill>,
+}
+
+/// The re-integration of block `block` into its buffer, at position `pos`.
+struct Refill {
+    run: RdmpRun,
+    pos: usize,
+    block: usize,
 }
 
 impl Reversal {
@@ -86,8 +99,62 @@ impl Reversal {
         self.i >= self.n
     }
 
+    /// Starts re-integrating block `b` (≥ 1) from its checkpoint.
+    fn start_refill(
+        &mut self,
+        b: usize,
+        rdmp: &Rdmp,
+        cfg: &RdmpConfig,
+    ) -> Result<(), ReverseError> {
+        // Checkpoints are in time order: block b starts at checkpoint J − b.
+        let c = self
+            .checkpoints
+            .len()
+            .checked_sub(b)
+            .and_then(|c| self.checkpoints.get(c))
+            .ok_or(ReverseError::MissingCheckpoint)?;
+        match &mut self.refill {
+            // A run of this motion (`begin` clears the last motion's): keep its bases.
+            Some(r) => {
+                r.run.resume_from(c);
+                r.pos = 0;
+                r.block = b;
+            }
+            None => {
+                self.refill = Some(Refill {
+                    run: RdmpRun::resume(rdmp, cfg, c)?,
+                    pos: 0,
+                    block: b,
+                })
+            }
+        }
+        Ok(())
+    }
+
+    /// Takes the finished forward run, so re-integration reuses its bases instead of
+    /// computing them again.
+    pub fn adopt(&mut self, run: RdmpRun) {
+        if self.refill.is_none() {
+            self.refill = Some(Refill {
+                run,
+                pos: 0,
+                block: 0,
+            });
+        }
+    }
+
+    /// Work ahead of the first backward tick, for a tick without an RDMP step: starts
+    /// re-integrating the second block. Does nothing when done already or not needed.
+    pub fn prepare(&mut self, rdmp: &Rdmp, cfg: &RdmpConfig) -> Result<(), ReverseError> {
+        let started = matches!(&self.refill, Some(r) if r.block == 1);
+        if self.i == 0 && !started && self.blocks() > 1 {
+            self.start_refill(1, rdmp, cfg)?;
+        }
+        Ok(())
+    }
+
     /// The next configuration backwards (q_{n−1}, …, q_0), with at most one RDMP step of
-    /// re-integration.
+    /// re-integration or one resume.
     pub fn next(
         &mut self,
         model: &RobotModel,
@@ -100,25 +167,28 @@ impl Reversal {
         let j = self.i / BLOCK;
         let start = self.block_start(j);
         let q = self.buffers[j % 2][self.n - 1 - self.i - start];
-        if self.i.is_multiple_of(BLOCK) && j + 1 < self.blocks() {
-            // Checkpoints are in time order: block j+1 starts at checkpoint J − (j+1).
-            let c = self
-                .checkpoints
-                .len()
-                .checked_sub(j + 1)
-                .and_then(|c| self.checkpoints.get(c))
-                .ok_or(ReverseError::MissingCheckpoint)?;
-            self.refill = Some((RdmpRun::resume(rdmp, cfg, c)?, 0));
+        let next_started = matches!(&self.refill, Some(r) if r.block == j + 1);
+        if j + 1 < self.blocks() && !next_started {
+            // Not started ahead.
+            self.start_refill(j + 1, rdmp, cfg)?;
         }
         let len = start - self.block_start(j + 1);
-        if let Some((run, pos)) = &mut self.refill
-            && *pos < len
+        let mut complete = false;
+        if let Some(r) = &mut self.refill
+            && r.block == j + 1
+            && r.pos < len
         {
-            self.buffers[(j + 1) % 2][*pos] = (*run.q()).into();
-            *pos += 1;
-            if *pos < len {
-                run.step(model, rdmp, cfg)?;
+            self.buffers[(j + 1) % 2][r.pos] = (*r.run.q()).into();
+            r.pos += 1;
+            if r.pos < len {
+                r.run.step(model, rdmp, cfg)?;
+            } else {
+                complete = true;
             }
+        }
+        if complete && j + 2 < self.blocks() {
+            // This tick had no step: start the next block's re-integration.
+            self.start_refill(j + 2, rdmp, cfg)?;
         }
         self.i += 1;
         Ok(Some(JointVector::from(q)))
@@ -177,8 +247,12 @@ mod tests {
         let model = RobotModel::kmr_iiwa14();
         let cfg = RdmpConfig::default();
         let mut rev = std::boxed::Box::new(Reversal::new());
-        // Shorter than a block, one block, a block and a bit, several blocks.
-        for n in [40, BLOCK, BLOCK + 1, 3 * BLOCK + 77] {
+        // Shorter than a block, one block, a block and a bit, several blocks; with the first
+        // resume prepared ahead or not.
+        for (n, prepared) in [40, BLOCK, BLOCK + 1, 3 * BLOCK + 77]
+            .into_iter()
+            .flat_map(|n| [(n, false), (n, true)])
+        {
             let r = rdmp(&model, n);
             let q0 = JointVector::from(model.home);
             let goal = ArmKinematics::new(
@@ -197,13 +271,20 @@ mod tests {
                 rev.record(&run);
                 forward.push(run.step(&model, &r, &cfg).expect("step").q);
             }
+            if prepared {
+                rev.adopt(run);
+                rev.prepare(&r, &cfg).expect("prepare");
+            }
             let mut backward = Vec::new();
             while let Some(q) = rev.next(&model, &r, &cfg).expect("reverse") {
                 backward.push(q);
             }
             forward.pop();
             forward.reverse();
-            assert_eq!(backward, forward, "n = {n}: bit-identical reversal");
+            assert_eq!(
+                backward, forward,
+                "n = {n}, prepared {prepared}: bit-identical reversal"
+            );
         }
         assert_eq!(
             rev.begin(MAX_STEPS + 1),

@@ -7,7 +7,7 @@
 //! a blob in flash is used where it lies: only the record being read is decoded.
 
 use crate::NA;
-use crate::dmp::{DmpParams, Forcing, MAX_BASES, PositionDmp, RotationDmp};
+use crate::dmp::{DmpParams, MAX_BASES};
 use crate::field::{Field, FieldData, FieldError};
 use crate::motion::ActionTemplate;
 use crate::rdmp::Rdmp;
@@ -115,6 +115,12 @@ pub enum Section {
 
 /// CRC-32 (IEEE 802.3, reflected, init and final xor 0xFFFFFFFF).
 pub fn crc32(data: &[u8]) -> u32 {
+    crc32_update(0, data)
+}
+
+/// The CRC-32 of a ‖ `data`, given `crc` = the CRC-32 of a (0 for the empty a), so a stream
+/// can be checksummed piece by piece.
+pub fn crc32_update(crc: u32, data: &[u8]) -> u32 {
     const TABLE: [u32; 256] = {
         let mut t = [0u32; 256];
         let mut i = 0;
@@ -134,7 +140,7 @@ pub fn crc32(data: &[u8]) -> u32 {
         }
         t
     };
-    let mut c = 0xFFFF_FFFFu32;
+    let mut c = !crc;
     for &b in data {
         c = TABLE[((c ^ b as u32) & 0xFF) as usize] ^ (c >> 8);
     }
@@ -393,15 +399,15 @@ impl<'a> RdmpData<'a> {
 
     /// The working RDMP (one skill's weights widened to f64 while it is used).
     pub fn decode(&self) -> Option<Rdmp> {
+        let mut r = Rdmp::empty();
+        self.decode_into(&mut r).then_some(r)
+    }
+
+    /// [`RdmpData::decode`] into `out`, in one pass over the weights and without moving the
+    /// (3 KB) RDMP: what a controller tick can afford. False (with `out` unusable) if the
+    /// record is invalid.
+    pub fn decode_into(&self, out: &mut Rdmp) -> bool {
         let n = self.n_basis as usize;
-        let params = DmpParams {
-            n_basis: n,
-            alpha_z: self.alpha_z,
-            beta_z: self.beta_z,
-            alpha_zeta: self.alpha_zeta,
-            min_amplitude: self.min_amplitude,
-            ridge: 0.0,
-        };
         let finite = [
             self.alpha_z,
             self.beta_z,
@@ -417,47 +423,36 @@ impl<'a> RdmpData<'a> {
             || !finite
             || !(self.tau > 0.0)
         {
-            return None;
+            return false;
         }
-        let w = |c: usize| {
-            let mut out = [0.0; MAX_BASES];
-            for (i, o) in out.iter_mut().take(n).enumerate() {
-                let at = (c * n + i) * 4;
-                let b = &self.weights[at..at + 4];
-                *o = f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64;
+        let params = DmpParams {
+            n_basis: n,
+            alpha_z: self.alpha_z,
+            beta_z: self.beta_z,
+            alpha_zeta: self.alpha_zeta,
+            min_amplitude: self.min_amplitude,
+            ridge: 0.0,
+        };
+        let (p, r, g) = (&mut out.position, &mut out.rotation, &mut out.gamma);
+        let mut all_finite = true;
+        for (c, bytes) in self.weights.chunks_exact(4 * n).enumerate() {
+            let (weights, scaled) = match c {
+                0..3 => (&mut p.forcing.weights[c], &mut p.forcing.scaled[c]),
+                3..6 => (&mut r.forcing.weights[c - 3], &mut r.forcing.scaled[c - 3]),
+                _ => (&mut g.forcing.weights[0], &mut g.forcing.scaled[0]),
+            };
+            for (w, b) in weights.iter_mut().zip(bytes.chunks_exact(4)) {
+                *w = f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64;
+                all_finite &= w.is_finite();
             }
-            out
-        };
-        if (0..RDMP_COORDS).any(|c| w(c).iter().any(|v| !v.is_finite())) {
-            return None;
+            weights[n..].fill(0.0);
+            *scaled = self.scaled & (1 << c) != 0;
         }
-        let s = |c: usize| self.scaled & (1 << c) != 0;
-        let forcing3 = |c0: usize| Forcing {
-            weights: [w(c0), w(c0 + 1), w(c0 + 2)],
-            scaled: [s(c0), s(c0 + 1), s(c0 + 2)],
-        };
-        Some(Rdmp {
-            position: PositionDmp {
-                params,
-                tau: self.tau,
-                forcing: forcing3(0),
-            },
-            rotation: RotationDmp {
-                params,
-                tau: self.tau,
-                forcing: forcing3(3),
-                travel: Vector3::from(self.travel),
-            },
-            gamma: PositionDmp {
-                params,
-                tau: self.tau,
-                forcing: Forcing {
-                    weights: [w(6)],
-                    scaled: [s(6)],
-                },
-            },
-            gamma_goal: self.gamma_goal,
-        })
+        (p.params, p.tau) = (params, self.tau);
+        (r.params, r.tau, r.travel) = (params, self.tau, Vector3::from(self.travel));
+        (g.params, g.tau) = (params, self.tau);
+        out.gamma_goal = self.gamma_goal;
+        all_finite
     }
 }
 
@@ -634,11 +629,22 @@ impl<'a> Blob<'a> {
 
     /// RDMP `i`, decoded into its working form.
     pub fn rdmp(&self, i: usize) -> Result<Rdmp, BlobError> {
+        let mut r = Rdmp::empty();
+        self.rdmp_into(i, &mut r)?;
+        Ok(r)
+    }
+
+    /// [`Blob::rdmp`] into `out` ([`RdmpData::decode_into`]).
+    pub fn rdmp_into(&self, i: usize, out: &mut Rdmp) -> Result<(), BlobError> {
         let d: RdmpData<'a> = self.payload.rdmps.get(i, Section::Rdmps)?;
-        d.decode().ok_or(BlobError::Decode {
-            section: Section::Rdmps,
-            index: i,
-        })
+        if d.decode_into(out) {
+            Ok(())
+        } else {
+            Err(BlobError::Decode {
+                section: Section::Rdmps,
+                index: i,
+            })
+        }
     }
 
     pub fn skill(&self, i: usize) -> Result<SkillData<'a>, BlobError> {
@@ -667,5 +673,18 @@ fn check_poses(poses: &[[f64; 7]], section: Section, index: usize) -> Result<(),
         Ok(())
     } else {
         Err(BlobError::Reference { section, index })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crc32_matches_the_check_value_whole_and_piecewise() {
+        // The check value of CRC-32/ISO-HDLC.
+        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+        let piecewise = crc32_update(crc32_update(crc32(b"1234"), b""), b"56789");
+        assert_eq!(piecewise, 0xCBF4_3926);
     }
 }

@@ -17,7 +17,8 @@
 //! limits and non-finite values stop integration with a typed [`RdmpError`].
 
 use crate::dmp::{
-    DmpError, DmpParams, MIN_SAMPLES, Phase, PositionDmp, PositionState, RotationDmp, RotationState,
+    DmpError, DmpParams, Forcing, MAX_BASES, MIN_SAMPLES, Phase, PositionDmp, PositionState,
+    RotationDmp, RotationState,
 };
 use crate::kinematics::ArmKinematics;
 use crate::nullspace::{JacobianQr, kernel};
@@ -37,6 +38,39 @@ pub struct Rdmp {
     pub gamma: PositionDmp<1>,
     /// Null-space goal γ_g = γ(t̄), reused unchanged for new goals.
     pub gamma_goal: f64,
+}
+
+impl Rdmp {
+    /// An RDMP with no motion (zero weights, default parameters): storage to decode into.
+    pub fn empty() -> Self {
+        let params = DmpParams::default();
+        let forcing = |scaled| Forcing {
+            weights: [[0.0; MAX_BASES]; 3],
+            scaled: [scaled; 3],
+        };
+        Rdmp {
+            position: PositionDmp {
+                params,
+                tau: 1.0,
+                forcing: forcing(true),
+            },
+            rotation: RotationDmp {
+                params,
+                tau: 1.0,
+                forcing: forcing(true),
+                travel: Vector3::zeros(),
+            },
+            gamma: PositionDmp {
+                params,
+                tau: 1.0,
+                forcing: Forcing {
+                    weights: [[0.0; MAX_BASES]],
+                    scaled: [true],
+                },
+            },
+            gamma_goal: 0.0,
+        }
+    }
 }
 
 /// Settings of an RDMP integration.
@@ -256,6 +290,18 @@ impl RdmpRun {
         })
     }
 
+    /// [`RdmpRun::resume`] in place, for a run of the same RDMP and step Δt: keeps this run's
+    /// bases (the costly part of a resume) and continues bit-identically from `c`.
+    pub fn resume_from(&mut self, c: &RdmpCheckpoint) {
+        self.phase.seek(c.step, c.zeta, c.zeta_next);
+        self.q = c.q;
+        self.position = c.position;
+        self.rotation = c.rotation;
+        self.gamma = c.gamma;
+        self.gamma_measured = c.gamma_measured;
+        self.previous = c.previous;
+    }
+
     /// Starts an integration from joint configuration `q0` towards the TCP goal `goal`
     /// (arm base frame).
     pub fn new(
@@ -272,15 +318,15 @@ impl RdmpRun {
             return Err(RdmpError::NonFinite { step: 0 });
         }
         let start = ArmKinematics::new(model, q0).tcp;
+        // The three DMPs share one phase (the position DMP's, as in `step`): it is built once.
         let (position, phase) =
             rdmp.position
                 .start(&start.translation.vector, &goal.translation.vector, cfg.dt)?;
-        let (rotation, _) = rdmp
-            .rotation
-            .start(&start.rotation, &goal.rotation, cfg.dt)?;
-        let (gamma, _) =
-            rdmp.gamma
-                .start(&Vector1::zeros(), &Vector1::new(rdmp.gamma_goal), cfg.dt)?;
+        if goal.rotation.coords.iter().any(|v| !v.is_finite()) || !rdmp.gamma_goal.is_finite() {
+            return Err(RdmpError::NonFinite { step: 0 });
+        }
+        let rotation = RotationState::new(&start.rotation, &goal.rotation, &rdmp.rotation.travel);
+        let gamma = PositionState::new(&Vector1::zeros(), &Vector1::new(rdmp.gamma_goal));
         Ok(RdmpRun {
             q: *q0,
             position,

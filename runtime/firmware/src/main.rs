@@ -1,190 +1,165 @@
-//! PRF cell-controller firmware: the no_std runtime on the Cortex-M7.
+//! PRF cell-controller firmware: the no_std runtime on a Cortex-M7.
 //!
 //! It reads the blob (BLOB region) and a task block (TASK region) in place, validates both,
-//! plans the task, executes the whole program tick by tick against the runtime's ideal cell,
-//! and prints over semihosting: a digest of the setpoint stream (every 1000th setpoint and the
-//! last, full precision), the instructions of planning and of every tick (SysTick under
-//! `qemu-system-arm -icount shift=0`, calibrated at start; resolution 40 instructions), and RAM
-//! use (data + bss + the stack's high-water mark). It exits with a status; any exception exits with a message.
+//! plans the task, and executes the program against the runtime's ideal cell, paced at 1 kHz
+//! by embassy-time's `Ticker` on a SysTick time driver. Over semihosting it prints the timing
+//! figures (instructions of loading, planning and every executor tick; under
+//! `qemu-system-arm -icount shift=0` SysTick counts are instruction counts), static RAM
+//! (data + bss + the stack's high-water mark) and a digest of the setpoint stream (CRC-32 of
+//! its records, every 1000th setpoint); with `--stream FILE` on the semihosting command line
+//! it writes every setpoint as a [`prf_runtime::stream`] record to FILE on the host. It exits
+//! with a status ([`fault::Exit`]); every exception and panic exits with a message.
 #![no_std]
 #![no_main]
 
-use core::sync::atomic::{AtomicU32, Ordering};
-use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m_rt::{ExceptionFrame, entry, exception};
-use cortex_m_semihosting::{debug, hprintln};
+mod block_on;
+mod board;
+#[cfg(feature = "embed")]
+mod embedded;
+mod fault;
+mod measure;
+mod semihost;
+mod time_driver;
+
+use block_on::block_on;
+use board::{BLOB_ADDRESS, TASK_ADDRESS, TICK_HZ};
+use cortex_m_rt::entry;
+use cortex_m_semihosting::hprintln;
 use embassy_time::{Duration, Instant};
+use fault::{Exit, exit};
+use measure::Stack;
 use prf_runtime::executor::{Executor, ExecutorConfig, Mode};
 use prf_runtime::ideal::IdealCell;
+use prf_runtime::program::Program;
 use prf_runtime::reverse::Reversal;
-use prf_runtime::{Runtime, plan};
+use prf_runtime::stream::{self, RECORD_LEN};
+use prf_runtime::{Runtime, Task, plan};
+use prf_shared::blob::{Blob, crc32_update};
+use semihost::HostFile;
+use time_driver::{COUNTS_PER_PERIOD, counts};
 
 unsafe extern "C" {
     static _blob_start: u8;
     static _blob_end: u8;
     static _task_start: u8;
     static _task_end: u8;
-    static __sdata: u8;
-    static __edata: u8;
-    static __sbss: u8;
-    static __ebss: u8;
 }
 
-/// A linker-defined flash region as bytes.
+/// A flash region of `memory.x` as bytes.
 fn region(start: *const u8, end: *const u8) -> &'static [u8] {
-    // SAFETY: the symbols bound a flash region of memory.x that the firmware never writes.
+    // SAFETY: the linker symbols bound a flash region that the firmware never writes.
     unsafe { core::slice::from_raw_parts(start, end as usize - start as usize) }
-}
-
-const RELOAD: u32 = 0x00FF_FFFF;
-static WRAPS: AtomicU32 = AtomicU32::new(0);
-
-/// SysTick count since start (SysTick counts under `-icount shift=0`).
-fn cycles() -> u64 {
-    loop {
-        let w = WRAPS.load(Ordering::SeqCst);
-        let v = cortex_m::peripheral::SYST::get_current();
-        if WRAPS.load(Ordering::SeqCst) == w {
-            return w as u64 * (RELOAD as u64 + 1) + (RELOAD - v) as u64;
-        }
-    }
-}
-
-const STACK_PAINT: u32 = 0xA5A5_A5A5;
-/// Bytes below the stack pointer painted to measure the stack's high-water mark.
-const PAINT_BYTES: usize = 512 * 1024;
-
-fn sp() -> usize {
-    cortex_m::register::msp::read() as usize
-}
-
-fn paint_stack() -> usize {
-    let top = sp() - 64;
-    let bottom = top - PAINT_BYTES;
-    for a in (bottom..top).step_by(4) {
-        // SAFETY: RAM below the live stack (4 MiB RAM, nothing else lives there).
-        unsafe { core::ptr::write_volatile(a as *mut u32, STACK_PAINT) };
-    }
-    bottom
-}
-
-/// Deepest stack use since painting, from the top of RAM's stack start.
-fn stack_used(bottom: usize, stack_top: usize) -> usize {
-    let mut a = bottom;
-    // SAFETY: reads the painted area only.
-    while a < stack_top && unsafe { core::ptr::read_volatile(a as *const u32) } == STACK_PAINT {
-        a += 4;
-    }
-    stack_top - a
-}
-
-fn exit(code: i32) -> ! {
-    if code == 0 {
-        debug::exit(debug::EXIT_SUCCESS);
-    } else {
-        debug::exit(debug::EXIT_FAILURE);
-    }
-    loop {
-        cortex_m::asm::bkpt();
-    }
 }
 
 #[entry]
 fn main() -> ! {
-    let stack_top = sp();
-    let paint_bottom = paint_stack();
-    let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| exit(104));
-    cp.SYST.set_clock_source(SystClkSource::Core);
-    cp.SYST.set_reload(RELOAD);
-    cp.SYST.clear_current();
-    cp.SYST.enable_interrupt();
-    cp.SYST.enable_counter();
-    // The first reload happens on the first count: wait for it, so counts are monotonic.
-    while cortex_m::peripheral::SYST::get_current() == 0 {}
-    run(stack_top, paint_bottom)
-}
-
-/// Instructions per SysTick count: under `-icount shift=0` each instruction takes 1 ns of
-/// virtual time and SysTick runs at the board's 25 MHz, so 40; measured here on a loop of
-/// exactly 2 instructions per iteration rather than assumed.
-fn instructions_per_count() -> u64 {
-    let n: u32 = 1_000_000;
-    let c = cycles();
-    // SAFETY: a register-only countdown loop.
-    unsafe {
-        core::arch::asm!("2:", "subs {0}, {0}, #1", "bne 2b", inout(reg) n => _, options(nomem, nostack));
-    }
-    let counts = (cycles() - c).max(1);
-    (2 * n as u64 + counts / 2) / counts
-}
-
-#[inline(never)]
-fn run(stack_top: usize, paint_bottom: usize) -> ! {
-    let k = instructions_per_count();
-    hprintln!("SysTick: {} instructions per count (calibrated)", k);
-    let blob_region = region(&raw const _blob_start, &raw const _blob_end);
-    let bytes = match prf_shared::blob::Blob::stored_len(blob_region)
-        .ok()
-        .and_then(|n| blob_region.get(..n))
-    {
-        Some(b) => b,
-        None => {
-            hprintln!(
-                "prf-firmware: no blob at 0x00300000 (flash one: -device loader,file=cell.blob,addr=0x00300000)"
-            );
-            exit(2);
-        }
+    let stack = Stack::paint();
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        panic!("core peripherals taken twice");
     };
-    let t0 = cycles();
+    time_driver::start(cp.SYST);
+    let k = measure::instructions_per_count();
+    hprintln!("SysTick: {} instructions per count (calibrated)", k);
+    let mut cmdline = [0u8; 256];
+    let cmdline = semihost::command_line(&mut cmdline);
+    let (rt, task, program) = load_and_plan(k);
+    let status = execute(&rt, &task, program, k, semihost::option(cmdline, "stream"));
+    let (data, bss) = measure::static_ram();
+    let stack = stack.high_water_mark();
+    hprintln!(
+        "ram data {} bss {} stack {} total {} bytes",
+        data,
+        bss,
+        stack,
+        data + bss + stack
+    );
+    exit(status)
+}
+
+/// Loads the blob and the task block from flash and plans the task; exits on any error.
+#[inline(never)]
+fn load_and_plan(k: u64) -> (Runtime<'static>, Task<'static>, Program) {
+    let blob = region(&raw const _blob_start, &raw const _blob_end);
+    let Some(bytes) = Blob::stored_len(blob).ok().and_then(|n| blob.get(..n)) else {
+        hprintln!(
+            "prf-firmware: no blob at {:#010x} (flash one: -device loader,file=cell.blob,addr={:#010x})",
+            BLOB_ADDRESS,
+            BLOB_ADDRESS
+        );
+        exit(Exit::NoBlob);
+    };
+    let t0 = counts();
     let rt = match Runtime::load(bytes) {
         Ok(rt) => rt,
         Err(e) => {
-            hprintln!("prf-firmware: corrupt blob at 0x00300000: {}", e);
-            exit(3);
+            hprintln!("prf-firmware: corrupt blob at {:#010x}: {}", BLOB_ADDRESS, e);
+            exit(Exit::CorruptBlob);
         }
     };
-    let load = cycles() - t0;
-    let task =
-        match prf_runtime::task_block::decode(region(&raw const _task_start, &raw const _task_end))
-        {
-            Ok(t) => t,
-            Err(e) => {
-                hprintln!(
-                    "prf-firmware: {} at 0x003F0000 (write one: prf plan … --task-block task.bin)",
-                    e
-                );
-                exit(4);
-            }
-        };
-    hprintln!(
-        "blob {} B valid; load {} instructions",
-        bytes.len(),
-        load * k
-    );
+    let load = counts() - t0;
+    hprintln!("blob {} B valid; load {} instructions", bytes.len(), load * k);
+    let task = match prf_runtime::task_block::decode(region(
+        &raw const _task_start,
+        &raw const _task_end,
+    )) {
+        Ok(t) => t,
+        Err(e) => {
+            hprintln!(
+                "prf-firmware: {} at {:#010x} (write one with `prf plan … --task-block task.bin`)",
+                e,
+                TASK_ADDRESS
+            );
+            exit(Exit::NoTask);
+        }
+    };
     hprintln!("task {} {} -> {}", task.part.id, task.from.id, task.to.id);
-    let t1 = cycles();
+    let t1 = counts();
     let p = match plan(&rt, &task) {
         Ok(p) => p,
         Err(e) => {
             hprintln!("prf-firmware: plan: {}", e);
-            exit(5);
+            exit(Exit::Plan);
         }
     };
-    let planning = cycles() - t1;
     hprintln!(
         "plan J* {:.6e} feasible {} integrations {} instructions {}",
         p.skills.j,
         p.skills.feasible,
         p.skills.stats.integrations,
-        planning * k
+        (counts() - t1) * k
     );
     let Some(program) = p.program else {
-        hprintln!("prf-firmware: no program");
-        exit(6);
+        hprintln!("prf-firmware: the task has no program");
+        exit(Exit::NoProgram);
     };
+    (rt, task, program)
+}
+
+/// Setpoint records buffered before a write to the host.
+const BUFFERED: usize = 32;
+
+/// Runs `program` on the ideal cell at 1 kHz until it is done or faults.
+#[inline(never)]
+fn execute(
+    rt: &Runtime<'_>,
+    task: &Task<'_>,
+    program: Program,
+    k: u64,
+    stream_path: Option<&str>,
+) -> Exit {
+    let mut file = match stream_path.map(|p| (p, HostFile::create(p))) {
+        Some((p, None)) => {
+            hprintln!("prf-firmware: cannot create {} on the host", p);
+            return Exit::Output;
+        }
+        Some((_, f)) => f,
+        None => None,
+    };
+    let mut buffer = [0u8; BUFFERED * RECORD_LEN];
+    let mut buffered = 0;
     let mut reversal = Reversal::new();
     let mut ex = Executor::new(
-        &rt,
+        rt,
         program,
         &task.home,
         ExecutorConfig::default(),
@@ -192,19 +167,45 @@ fn run(stack_top: usize, paint_bottom: usize) -> ! {
     );
     let mut cell = IdealCell::new(rt.model.home, &task.home);
     let dt = rt.config.rdmp.dt;
-    let tick = Duration::from_micros(1000);
-    let mut now = Instant::from_ticks(0);
-    let (mut max, mut sum, mut n) = (0u64, 0u64, 0u64);
-    let mut last = None;
-    for k in 0..2_000_000u32 {
-        let c = cycles();
-        let sp = ex.tick(now, &cell.measured);
-        let used = cycles() - c;
-        max = max.max(used);
-        sum += used;
-        n += 1;
+    let period = Duration::from_hz(TICK_HZ as u64);
+    let mut t = Instant::from_ticks(0);
+    let (mut ticks, mut max, mut sum, mut late, mut busy, mut misses) = (0u64, 0, 0, 0, 0, 0);
+    let mut worst = (0u32, Mode::Base);
+    // Per mode (Base, Arm, Gripper, Done, Fault): ticks, max, sum.
+    let mut by_mode = [(0u64, 0u64, 0u64); 5];
+    let mut crc = 0;
+    let (mut ticker, mut due) = time_driver::aligned_ticker(period);
+    let sp = loop {
+        block_on(ticker.next());
+        let woke = counts();
+        late = late.max(woke - due);
+        let sp = ex.tick(t, &cell.measured);
+        let used = counts() - woke;
         cell.apply(&sp, dt);
-        if k % 1000 == 0 || matches!(sp.mode, Mode::Done | Mode::Fault) {
+        let record = stream::encode(&sp);
+        crc = crc32_update(crc, &record);
+        let work = counts() - due;
+        busy = busy.max(work);
+        misses += (work >= COUNTS_PER_PERIOD as u64) as u64;
+        ticks += 1;
+        if used > max {
+            max = used;
+            worst = (sp.seq, sp.mode);
+        }
+        sum += used;
+        let m = &mut by_mode[sp.mode as usize];
+        *m = (m.0 + 1, m.1.max(used), m.2 + used);
+        let end = matches!(sp.mode, Mode::Done | Mode::Fault);
+        if let Some(f) = file.as_mut() {
+            buffer[buffered * RECORD_LEN..][..RECORD_LEN].copy_from_slice(&record);
+            buffered += 1;
+            if (buffered == BUFFERED || end) && !f.write_all(&buffer[..buffered * RECORD_LEN]) {
+                hprintln!("prf-firmware: writing the setpoint stream failed");
+                return Exit::Output;
+            }
+            buffered %= BUFFERED;
+        }
+        if sp.seq % 1000 == 1 || end {
             let q = sp.arm;
             hprintln!(
                 "sp {} {} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e} {:.17e}",
@@ -219,52 +220,39 @@ fn run(stack_top: usize, paint_bottom: usize) -> ! {
                 q[6]
             );
         }
-        last = Some(sp);
-        if matches!(sp.mode, Mode::Done | Mode::Fault) {
-            break;
+        if end {
+            break sp;
         }
-        now += tick;
-    }
-    let done = last.is_some_and(|s| s.mode == Mode::Done);
-    let data = &raw const __edata as usize - &raw const __sdata as usize;
-    let bss = &raw const __ebss as usize - &raw const __sbss as usize;
-    let stack = stack_used(paint_bottom, stack_top);
+        t += period;
+        due += COUNTS_PER_PERIOD as u64;
+    };
     hprintln!(
-        "ticks {} max {} mean {} instructions; done {}",
-        n,
+        "ticks {} executor max {} (seq {} {:?}) mean {} instructions; loop max {} wake-up lateness max {} instructions; overruns {}",
+        ticks,
         max * k,
-        sum * k / n.max(1),
-        done
+        worst.0,
+        worst.1,
+        sum * k / ticks.max(1),
+        busy * k,
+        late * k,
+        misses
     );
-    hprintln!(
-        "ram data {} bss {} stack {} total {}",
-        data,
-        bss,
-        stack,
-        data + bss + stack
-    );
-    exit(if done { 0 } else { 7 })
-}
-
-#[exception]
-fn SysTick() {
-    WRAPS.fetch_add(1, Ordering::SeqCst);
-}
-
-#[exception]
-unsafe fn HardFault(ef: &ExceptionFrame) -> ! {
-    hprintln!("prf-firmware: HardFault at pc {:#010x}", ef.pc());
-    exit(101);
-}
-
-#[exception]
-unsafe fn DefaultHandler(irqn: i16) {
-    hprintln!("prf-firmware: unexpected exception {}", irqn);
-    exit(102);
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("prf-firmware: panic: {}", info);
-    exit(103);
+    for (name, (n, max, sum)) in ["base", "arm", "gripper"].iter().zip(by_mode) {
+        hprintln!(
+            "  {} ticks {} max {} mean {} instructions",
+            name,
+            n,
+            max * k,
+            sum * k / n.max(1)
+        );
+    }
+    hprintln!("stream {} setpoints crc32 {:08x}", ticks, crc);
+    match ex.fault() {
+        Some(f) => {
+            hprintln!("prf-firmware: the executor stopped: {}", f);
+            Exit::NotDone
+        }
+        None if sp.mode == Mode::Done => Exit::Done,
+        None => Exit::NotDone,
+    }
 }

@@ -147,12 +147,18 @@ impl Phase {
         zeta_next: f64,
     ) -> Result<Self, DmpError> {
         let mut phase = Phase::new(p, tau, dt)?;
-        phase.step = step;
-        phase.zeta = zeta;
-        phase.zeta_next = zeta_next;
-        phase.current = phase.basis.features(zeta);
-        phase.next = phase.basis.features(zeta_next);
+        phase.seek(step, zeta, zeta_next);
         Ok(phase)
+    }
+
+    /// Moves this phase to step `step` with ζ_k = `zeta`, ζ_{k+1} = `zeta_next` of the same
+    /// motion, keeping the basis: [`Phase::resume`] without recomputing the bases.
+    pub fn seek(&mut self, step: usize, zeta: f64, zeta_next: f64) {
+        self.step = step;
+        self.zeta = zeta;
+        self.zeta_next = zeta_next;
+        self.current = self.basis.features(zeta);
+        self.next = self.basis.features(zeta_next);
     }
 
     /// True once all `n_steps` steps are done.

@@ -1,0 +1,13 @@
+//! The board: QEMU `mps2-an500` (Cortex-M7 with the double-precision FPU). Adapting to a real
+//! cell controller: set [`SYSTICK_HZ`] to its core clock (SysTick runs on it) and the regions
+//! in the top-level `memory.x` (see the README).
+
+/// SysTick clock, Hz: the core clock. mps2-an500 runs at 25 MHz.
+pub const SYSTICK_HZ: u32 = 25_000_000;
+
+/// Control rate, Hz: the executor ticks and SysTick interrupts at this rate.
+pub const TICK_HZ: u32 = 1_000;
+
+/// Where the blob and the task block are flashed (`memory.x` BLOB and TASK), for messages.
+pub const BLOB_ADDRESS: u32 = 0x0030_0000;
+pub const TASK_ADDRESS: u32 = 0x003F_0000;

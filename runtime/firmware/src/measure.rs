@@ -1,0 +1,69 @@
+//! What the timing and RAM figures are measured with: SysTick counts converted to
+//! instructions (under `qemu-system-arm -icount shift=0` every instruction takes 1 ns of
+//! virtual time, so counts are deterministic instruction counts), and a painted stack.
+
+use crate::time_driver::counts;
+
+/// Instructions per SysTick count, measured on a loop of exactly 2 instructions per
+/// iteration (40 on mps2-an500 under `-icount shift=0`: 1 ns per instruction, 25 MHz).
+pub fn instructions_per_count() -> u64 {
+    let n: u32 = 1_000_000;
+    let c = counts();
+    // SAFETY: a register-only countdown loop.
+    unsafe {
+        core::arch::asm!("2:", "subs {0}, {0}, #1", "bne 2b", inout(reg) n => _, options(nomem, nostack));
+    }
+    let elapsed = (counts() - c).max(1);
+    (2 * n as u64 + elapsed / 2) / elapsed
+}
+
+const PAINT: u32 = 0xA5A5_A5A5;
+/// Bytes below the stack pointer painted to find the stack's high-water mark.
+const PAINT_BYTES: usize = 256 * 1024;
+
+/// The painted stack: its top (the stack pointer at start) and the lowest painted word.
+#[derive(Clone, Copy)]
+pub struct Stack {
+    top: usize,
+    bottom: usize,
+}
+
+impl Stack {
+    /// Paints [`PAINT_BYTES`] below the current stack pointer. Call first thing in `main`.
+    #[inline(always)]
+    pub fn paint() -> Stack {
+        let top = cortex_m::register::msp::read() as usize;
+        let live = top - 256;
+        let bottom = live - PAINT_BYTES;
+        for a in (bottom..live).step_by(4) {
+            // SAFETY: RAM below the live stack that nothing else uses (memory.x: 4 MiB RAM,
+            // data and bss at its start).
+            unsafe { core::ptr::write_volatile(a as *mut u32, PAINT) };
+        }
+        Stack { top, bottom }
+    }
+
+    /// Deepest stack use since painting, bytes.
+    pub fn high_water_mark(&self) -> usize {
+        let mut a = self.bottom;
+        // SAFETY: reads the painted range only.
+        while a < self.top && unsafe { core::ptr::read_volatile(a as *const u32) } == PAINT {
+            a += 4;
+        }
+        self.top - a
+    }
+}
+
+unsafe extern "C" {
+    static __sdata: u8;
+    static __edata: u8;
+    static __sbss: u8;
+    static __ebss: u8;
+}
+
+/// Static RAM: (data, bss) bytes.
+pub fn static_ram() -> (usize, usize) {
+    let data = &raw const __edata as usize - &raw const __sdata as usize;
+    let bss = &raw const __ebss as usize - &raw const __sbss as usize;
+    (data, bss)
+}
