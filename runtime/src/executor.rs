@@ -293,15 +293,13 @@ impl<'r, 'a> Executor<'r, 'a> {
             Some(Segment::Arm { .. }) => {
                 self.prepare(i)?;
             }
-            Some(Segment::Reverse { .. }) => {
-                if self.prepared.is_some() {
-                    self.reversal
-                        .prepare(&self.rdmp, &self.rt.config.rdmp)
-                        .map_err(|error| Fault::Reverse {
-                            segment: i as u8,
-                            error,
-                        })?;
-                }
+            Some(Segment::Reverse { .. }) if self.prepared.is_some() => {
+                self.reversal
+                    .prepare(&self.rdmp, &self.rt.config.rdmp)
+                    .map_err(|error| Fault::Reverse {
+                        segment: i as u8,
+                        error,
+                    })?;
             }
             _ => {}
         }

@@ -21,8 +21,8 @@ use embassy_time_queue_utils::queue_generic::ConstGenericQueue;
 pub const COUNTS_PER_PERIOD: u32 = SYSTICK_HZ / TICK_HZ;
 /// SysTick counts per embassy tick.
 const COUNTS_PER_EMBASSY_TICK: u64 = SYSTICK_HZ as u64 / embassy_time_driver::TICK_HZ;
-const _: () = assert!(SYSTICK_HZ % TICK_HZ == 0 && COUNTS_PER_PERIOD <= 0x0100_0000);
-const _: () = assert!(SYSTICK_HZ as u64 % embassy_time_driver::TICK_HZ == 0);
+const _: () = assert!(SYSTICK_HZ.is_multiple_of(TICK_HZ) && COUNTS_PER_PERIOD <= 0x0100_0000);
+const _: () = assert!((SYSTICK_HZ as u64).is_multiple_of(embassy_time_driver::TICK_HZ));
 
 struct State {
     /// SysTick periods elapsed.
