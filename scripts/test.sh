@@ -35,6 +35,11 @@ PATH="/usr/bin:$PATH" RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 /usr/bin/cargo buil
   --target-dir target/thumbv7em
 echo "built: $(ls target/thumbv7em/thumbv7em-none-eabihf/release/*.rlib | xargs -n1 basename | tr '\n' ' ')"
 
+step "firmware (Cortex-M7): fmt, clippy -D warnings, build (installs qemu-system-arm, binutils-arm-none-eabi)"
+(cd runtime/firmware && cargo fmt -- --check)
+scripts/firmware.sh clippy
+scripts/firmware.sh build
+
 step "main job smoke run: prf demo --task 1 (dataset, blob, firmware-sim, one task in real time)"
 cargo run --locked -q -p prf-offline --bin prf -- demo --task 1 >/tmp/prf-demo.$$ || { cat /tmp/prf-demo.$$; exit 1; }
 tail -n 4 /tmp/prf-demo.$$; rm -f /tmp/prf-demo.$$

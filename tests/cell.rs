@@ -5,10 +5,10 @@
 //! Every test uses its own cell name (pid + test), so tests never share services with each
 //! other or with a running `prf demo`. The tests are real-time: they run one at a time.
 
-use indicatif::ProgressBar;
+mod common;
+
 use prf_firmware_sim::clock::now_ns;
 use prf_firmware_sim::link::{self, Observer};
-use prf_offline::compile::blob_of_demonstrations;
 use prf_offline::tasks::FloorTask;
 use prf_offline::world::{Planar, World};
 use prf_runtime::executor::planar;
@@ -44,24 +44,8 @@ fn dir() -> &'static Path {
 fn blob() -> &'static Path {
     static BLOB: OnceLock<PathBuf> = OnceLock::new();
     BLOB.get_or_init(|| {
-        let world = World::example();
-        let chosen: Vec<_> = world
-            .afforded_tasks()
-            .into_iter()
-            .filter(|a| {
-                let t = &a.task;
-                let key = (
-                    world.parts[t.part].id.as_str(),
-                    world.locations[t.from].kind.as_str(),
-                    world.locations[t.to].kind.as_str(),
-                );
-                (a.approach_from, a.approach_to, a.grasp) == (0, 0, 0)
-                    && (key == ("Part1", "CNC", "Printer") || key == ("Part2", "Printer", "Table"))
-            })
-            .collect();
-        let bytes = blob_of_demonstrations(&world, &chosen, &ProgressBar::hidden()).expect("blob");
         let path = dir().join("cell.blob");
-        std::fs::write(&path, bytes).expect("write blob");
+        common::write_two_demonstration_blob(&path);
         path
     })
 }

@@ -6,6 +6,7 @@ pub mod compile;
 pub mod dataset;
 pub mod demogen;
 pub mod execute;
+pub mod firmware;
 pub mod learn;
 pub mod robot_file;
 pub mod tasks;

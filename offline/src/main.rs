@@ -5,6 +5,7 @@ mod bench;
 mod bench_cell;
 mod check;
 mod demo;
+mod firmware_cmd;
 mod generate;
 mod learn_cmd;
 mod plan_cmd;
@@ -58,6 +59,11 @@ enum Command {
     /// Host cell figures: setpoint latency through iceoryx2 against a Unix socket, the 1 kHz
     /// loop's jitter and deadline misses against firmware-sim, Ruckig's per-update cost.
     BenchCell(bench_cell::Args),
+    /// Run tasks on the cell-controller firmware (Cortex-M7 under QEMU mps2-an500, blob flashed
+    /// into its region) and check each against the host: executor tick, planning and RAM
+    /// budgets, and the setpoint stream within 1e-9 rad. Installs QEMU and the toolchain if
+    /// missing.
+    Firmware(firmware_cmd::Args),
     /// Receiving side of `prf bench-cell`'s latency comparison.
     #[command(hide = true)]
     IpcPeer(bench_cell::PeerArgs),
@@ -78,6 +84,7 @@ fn main() -> anyhow::Result<()> {
         Some(Command::Plan(args)) => plan_cmd::run(&args),
         Some(Command::Run(args)) => run_cmd::run(&args),
         Some(Command::BenchCell(args)) => bench_cell::run(&args),
+        Some(Command::Firmware(args)) => firmware_cmd::run(&args),
         Some(Command::IpcPeer(args)) => bench_cell::peer(&args),
         Some(Command::FirmwareSim(args)) => prf_firmware_sim::cli::run(&args),
     }

@@ -4,7 +4,6 @@
 use cortex_m_rt::{ExceptionFrame, exception};
 use cortex_m_semihosting::{debug, hprintln};
 
-
 /// Exit statuses: the process status of `qemu-system-arm`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
@@ -48,12 +47,18 @@ fn fail(status: Exit, what: core::fmt::Arguments) -> ! {
 
 #[exception]
 unsafe fn HardFault(ef: &ExceptionFrame) -> ! {
-    fail(Exit::Exception, format_args!("HardFault at pc {:#010x}, lr {:#010x}", ef.pc(), ef.lr()))
+    fail(
+        Exit::Exception,
+        format_args!("HardFault at pc {:#010x}, lr {:#010x}", ef.pc(), ef.lr()),
+    )
 }
 
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
-    fail(Exit::Exception, format_args!("unexpected exception or interrupt {}", irqn))
+    fail(
+        Exit::Exception,
+        format_args!("unexpected exception or interrupt {}", irqn),
+    )
 }
 
 #[panic_handler]

@@ -62,6 +62,10 @@ fn main() -> ! {
     hprintln!("SysTick: {} instructions per count (calibrated)", k);
     let mut cmdline = [0u8; 256];
     let cmdline = semihost::command_line(&mut cmdline);
+    if semihost::flag(cmdline, "fault-test") {
+        // Proves the exception path: an undefined instruction, escalated to HardFault.
+        cortex_m::asm::udf();
+    }
     let (rt, task, program) = load_and_plan(k);
     let status = execute(&rt, &task, program, k, semihost::option(cmdline, "stream"));
     let (data, bss) = measure::static_ram();
@@ -92,12 +96,20 @@ fn load_and_plan(k: u64) -> (Runtime<'static>, Task<'static>, Program) {
     let rt = match Runtime::load(bytes) {
         Ok(rt) => rt,
         Err(e) => {
-            hprintln!("prf-firmware: corrupt blob at {:#010x}: {}", BLOB_ADDRESS, e);
+            hprintln!(
+                "prf-firmware: corrupt blob at {:#010x}: {}",
+                BLOB_ADDRESS,
+                e
+            );
             exit(Exit::CorruptBlob);
         }
     };
     let load = counts() - t0;
-    hprintln!("blob {} B valid; load {} instructions", bytes.len(), load * k);
+    hprintln!(
+        "blob {} B valid; load {} instructions",
+        bytes.len(),
+        load * k
+    );
     let task = match prf_runtime::task_block::decode(region(
         &raw const _task_start,
         &raw const _task_end,

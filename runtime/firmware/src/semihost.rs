@@ -19,8 +19,15 @@ pub fn command_line(buf: &mut [u8]) -> &str {
 /// The value after `--name` on the command line.
 pub fn option<'a>(cmdline: &'a str, name: &str) -> Option<&'a str> {
     let mut words = cmdline.split_ascii_whitespace();
-    words.find(|w| w.trim_start_matches('-') == name && w.starts_with("--"))?;
+    words.find(|w| w.strip_prefix("--") == Some(name))?;
     words.next()
+}
+
+/// True if `--name` is on the command line.
+pub fn flag(cmdline: &str, name: &str) -> bool {
+    cmdline
+        .split_ascii_whitespace()
+        .any(|w| w.strip_prefix("--") == Some(name))
 }
 
 /// A file on the host, opened for writing (truncated), binary.

@@ -1,0 +1,392 @@
+//! The cell-controller firmware seen from the host: build it and run it under QEMU with a blob
+//! and a task block (both through `scripts/firmware.sh`, the one home of the QEMU command
+//! line), read the figures it prints and the setpoint stream it writes, and compare that
+//! stream with the host runtime's for the same blob and task block.
+
+use crate::execute::execute;
+use crate::tasks::FloorTask;
+use anyhow::{Context, bail};
+use prf_runtime::executor::{ExecutorConfig, Mode, Setpoint};
+use prf_runtime::stream::{RECORD_LEN, Record, decode};
+use prf_runtime::{Runtime, plan, task_block};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Hard budget of one executor tick: 20 % of a 1 ms tick at 480 MHz.
+pub const MAX_TICK_INSTRUCTIONS: u64 = 100_000;
+/// The goal per tick.
+pub const GOAL_TICK_INSTRUCTIONS: u64 = 15_000;
+/// Stated bound of planning one task: 0.625 s at 480 MHz (one instruction per cycle).
+pub const MAX_PLANNING_INSTRUCTIONS: u64 = 300_000_000;
+/// Static RAM budget: data + bss + the stack's high-water mark.
+pub const MAX_STATIC_RAM: u64 = 128 * 1024;
+/// Firmware and host setpoints agree within this, rad (arm) and m / rad (platform goal).
+pub const STREAM_TOLERANCE: f64 = 1e-9;
+/// Ticks the host reference runs at most (an hour at 1 kHz).
+const MAX_TICKS: usize = 3_600_000;
+
+fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn script() -> PathBuf {
+    repository().join("scripts/firmware.sh")
+}
+
+/// Builds the firmware (installing the toolchain and QEMU when missing); the ELF's path.
+pub fn build() -> anyhow::Result<PathBuf> {
+    let out = Command::new("bash")
+        .arg(script())
+        .arg("build")
+        .output()
+        .context("running scripts/firmware.sh build")?;
+    if !out.status.success() {
+        bail!(
+            "scripts/firmware.sh build failed ({}):\n{}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let Some(elf) = stdout.lines().last() else {
+        bail!("scripts/firmware.sh build printed no path");
+    };
+    Ok(repository().join(elf.trim()))
+}
+
+/// What the firmware printed, parsed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Figures {
+    pub blob_bytes: u64,
+    pub load_instructions: u64,
+    pub feasible: bool,
+    pub integrations: u64,
+    pub planning_instructions: u64,
+    pub ticks: u64,
+    /// Executor ticks: max (and its sequence number), mean.
+    pub tick_max: u64,
+    pub tick_max_seq: u64,
+    pub tick_mean: u64,
+    /// Per mode (base, arm, gripper): (ticks, max, mean).
+    pub by_mode: [(u64, u64, u64); 3],
+    /// From the tick's due time to the end of its work (wake-up + executor + plant + record).
+    pub loop_max: u64,
+    pub lateness_max: u64,
+    pub overruns: u64,
+    pub crc32: u32,
+    pub ram_data: u64,
+    pub ram_bss: u64,
+    pub ram_stack: u64,
+    pub ram_total: u64,
+}
+
+/// The number after `key` in `line`.
+fn after<T: std::str::FromStr>(line: &str, key: &str) -> Option<T> {
+    let rest = &line[line.find(key)? + key.len()..];
+    let word = rest.split_whitespace().next()?;
+    word.trim_end_matches([';', ',', ')']).parse().ok()
+}
+
+impl Figures {
+    /// Parses the firmware's report; None if a line is missing.
+    pub fn parse(stdout: &str) -> Option<Figures> {
+        let line = |prefix: &str| stdout.lines().find(|l| l.starts_with(prefix));
+        let (blob, plan, ticks) = (line("blob ")?, line("plan ")?, line("ticks ")?);
+        let (stream, ram) = (line("stream ")?, line("ram ")?);
+        let mode = |name: &str| -> Option<(u64, u64, u64)> {
+            let l = line(&format!("  {name} ticks "))?;
+            Some((after(l, "ticks ")?, after(l, "max ")?, after(l, "mean ")?))
+        };
+        Some(Figures {
+            blob_bytes: after(blob, "blob ")?,
+            load_instructions: after(blob, "load ")?,
+            feasible: after(plan, "feasible ")?,
+            integrations: after(plan, "integrations ")?,
+            planning_instructions: after(plan, "instructions ")?,
+            ticks: after(ticks, "ticks ")?,
+            tick_max: after(ticks, "executor max ")?,
+            tick_max_seq: after(ticks, "(seq ")?,
+            tick_mean: after(ticks, ") mean ")?,
+            by_mode: [mode("base")?, mode("arm")?, mode("gripper")?],
+            loop_max: after(ticks, "loop max ")?,
+            lateness_max: after(ticks, "lateness max ")?,
+            overruns: after(ticks, "overruns ")?,
+            crc32: u32::from_str_radix(&after::<String>(stream, "crc32 ")?, 16).ok()?,
+            ram_data: after(ram, "data ")?,
+            ram_bss: after(ram, "bss ")?,
+            ram_stack: after(ram, "stack ")?,
+            ram_total: after(ram, "total ")?,
+        })
+    }
+}
+
+/// One run of the firmware under QEMU.
+#[derive(Debug)]
+pub struct Run {
+    /// QEMU's exit status (the firmware's, see `runtime/firmware/src/fault.rs`); None if
+    /// killed by a signal.
+    pub status: Option<i32>,
+    pub stdout: String,
+    pub figures: Option<Figures>,
+}
+
+/// Runs `elf` under QEMU; `args` go to `scripts/firmware.sh run-image`: `--blob FILE` and
+/// `--task FILE` flash them into their regions, `--stream FILE` has every setpoint written
+/// there, `--fault-test` executes an undefined instruction.
+pub fn run<I, S>(elf: &Path, args: I) -> anyhow::Result<Run>
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    let out = Command::new("bash")
+        .arg(script())
+        .arg("run-image")
+        .arg(elf)
+        .args(args)
+        .output()
+        .context("running scripts/firmware.sh run-image")?;
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    Ok(Run {
+        status: out.status.code(),
+        figures: Figures::parse(&stdout),
+        stdout,
+    })
+}
+
+/// Builds the self-contained image with `blob` and `task` linked in (feature `embed`); its
+/// path.
+pub fn image(blob: &Path, task: &Path) -> anyhow::Result<PathBuf> {
+    let out = Command::new("bash")
+        .arg(script())
+        .arg("image")
+        .arg(blob)
+        .arg(task)
+        .output()
+        .context("running scripts/firmware.sh image")?;
+    if !out.status.success() {
+        bail!(
+            "scripts/firmware.sh image failed ({}):\n{}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let Some(elf) = stdout.lines().last() else {
+        bail!("scripts/firmware.sh image printed no path");
+    };
+    Ok(repository().join(elf.trim()))
+}
+
+/// Reads a setpoint stream the firmware wrote.
+pub fn read_stream(path: &Path) -> anyhow::Result<Vec<Record>> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    if bytes.len() % RECORD_LEN != 0 {
+        bail!(
+            "{}: {} bytes is not a whole number of {RECORD_LEN}-byte records",
+            path.display(),
+            bytes.len()
+        );
+    }
+    Ok(bytes
+        .chunks_exact(RECORD_LEN)
+        .map(|c| decode(c.try_into().expect("chunk of RECORD_LEN")))
+        .collect())
+}
+
+/// The host runtime's setpoints for the task in `block` on blob `blob`: the firmware's
+/// computation (plan, then the executor against the ideal cell), run here.
+pub fn host_stream(blob: &[u8], block: &[u8]) -> anyhow::Result<Vec<Setpoint>> {
+    let rt = Runtime::load(blob).map_err(|e| anyhow::anyhow!("blob: {e}"))?;
+    let task = task_block::decode(block).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let p = plan(&rt, &task).map_err(|e| anyhow::anyhow!("plan: {e}"))?;
+    let Some(program) = p.program else {
+        bail!("the task has no program");
+    };
+    let run = execute(
+        &rt,
+        &program,
+        &task.home,
+        ExecutorConfig::default(),
+        MAX_TICKS,
+    );
+    if let Some(f) = run.fault {
+        bail!("the host executor stopped: {f}");
+    }
+    Ok(run.setpoints)
+}
+
+/// How far two setpoint streams are apart.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Comparison {
+    pub setpoints: usize,
+    /// Largest |q_firmware − q_host| over every joint and setpoint, rad.
+    pub arm: f64,
+    /// Largest difference of the platform goals, m or rad.
+    pub base_goal: f64,
+}
+
+/// Compares the firmware's stream with the host's: the same length, sequence numbers,
+/// modes, segments and gripper commands, and numbers within [`STREAM_TOLERANCE`]. The error
+/// names the first setpoint that differs.
+pub fn compare(host: &[Setpoint], firmware: &[Record]) -> Result<Comparison, String> {
+    if host.len() != firmware.len() {
+        return Err(format!(
+            "{} firmware setpoints, {} host setpoints",
+            firmware.len(),
+            host.len()
+        ));
+    }
+    let mut c = Comparison {
+        setpoints: host.len(),
+        arm: 0.0,
+        base_goal: 0.0,
+    };
+    let max_diff = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    };
+    for (h, f) in host.iter().zip(firmware) {
+        let same = (h.seq, h.mode as u8, h.segment, h.close_gripper)
+            == (f.seq, f.mode, f.segment, f.close_gripper);
+        let (arm, base) = (
+            max_diff(&h.arm, &f.arm),
+            max_diff(&h.base_goal, &f.base_goal),
+        );
+        if !(same && arm <= STREAM_TOLERANCE && base <= STREAM_TOLERANCE) {
+            return Err(format!(
+                "setpoint {}: host (mode {:?}, segment {}, gripper {}, q {:?}) != firmware (mode {}, segment {}, gripper {}, q {:?}): |Δq| {arm:.3e}, |Δbase goal| {base:.3e}",
+                h.seq,
+                h.mode,
+                h.segment,
+                h.close_gripper,
+                h.arm,
+                f.mode,
+                f.segment,
+                f.close_gripper,
+                f.arm
+            ));
+        }
+        c.arm = c.arm.max(arm);
+        c.base_goal = c.base_goal.max(base);
+    }
+    if host.last().is_some_and(|h| h.mode != Mode::Done) {
+        return Err("the streams agree but do not end in Done".into());
+    }
+    Ok(c)
+}
+
+impl Figures {
+    /// The budgets this run exceeds (empty: within all): executor tick, planning, static RAM,
+    /// and no overrun of the 1 kHz tick.
+    pub fn violations(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if self.tick_max > MAX_TICK_INSTRUCTIONS {
+            v.push(format!(
+                "executor tick {} > {MAX_TICK_INSTRUCTIONS} instructions (seq {})",
+                self.tick_max, self.tick_max_seq
+            ));
+        }
+        if self.planning_instructions > MAX_PLANNING_INSTRUCTIONS {
+            v.push(format!(
+                "planning {} > {MAX_PLANNING_INSTRUCTIONS} instructions",
+                self.planning_instructions
+            ));
+        }
+        if self.ram_total > MAX_STATIC_RAM {
+            v.push(format!(
+                "static RAM {} > {MAX_STATIC_RAM} bytes",
+                self.ram_total
+            ));
+        }
+        if self.overruns > 0 {
+            v.push(format!("{} ticks overran 1 ms", self.overruns));
+        }
+        v
+    }
+}
+
+/// One task on the firmware, checked against the host.
+#[derive(Debug)]
+pub struct TaskReport {
+    pub label: String,
+    pub run: Run,
+    /// The streams compared (Err: why they differ, or why there is no firmware stream).
+    pub comparison: Result<Comparison, String>,
+}
+
+/// Runs task `task` on the firmware with blob `blob` (task block and stream written into
+/// `dir`) and compares its stream with the host's.
+pub fn check_task(
+    elf: &Path,
+    blob: &Path,
+    task: &FloorTask,
+    dir: &Path,
+) -> anyhow::Result<TaskReport> {
+    let name: String = task
+        .label()
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+        .collect();
+    let block_path = dir.join(format!("{name}.task"));
+    let stream_path = dir.join(format!("{name}.stream"));
+    let mut block = [0u8; 1024];
+    let n = task_block::encode(&task.task(), &mut block).map_err(|e| anyhow::anyhow!("{e}"))?;
+    std::fs::write(&block_path, &block[..n])
+        .with_context(|| format!("writing {}", block_path.display()))?;
+    let _ = std::fs::remove_file(&stream_path);
+    let args = [
+        "--blob".as_ref(),
+        blob.as_os_str(),
+        "--task".as_ref(),
+        block_path.as_os_str(),
+        "--stream".as_ref(),
+        stream_path.as_os_str(),
+    ];
+    let run = run(elf, args)?;
+    let bytes = std::fs::read(blob).with_context(|| format!("reading {}", blob.display()))?;
+    let host = host_stream(&bytes, &block[..n])?;
+    let comparison = match (run.status, read_stream(&stream_path)) {
+        (Some(0), Ok(fw)) => compare(&host, &fw),
+        (status, Ok(_)) => Err(format!("the firmware exited with {status:?}")),
+        (_, Err(e)) => Err(format!("{e:#}")),
+    };
+    Ok(TaskReport {
+        label: task.label(),
+        run,
+        comparison,
+    })
+}
+
+/// [`check_task`] for every task, `workers` QEMU runs at a time; `done` sees each report as
+/// it completes. Reports are in the order of `tasks`.
+pub fn check_tasks(
+    elf: &Path,
+    blob: &Path,
+    tasks: &[FloorTask],
+    dir: &Path,
+    workers: usize,
+    done: impl Fn(&anyhow::Result<TaskReport>) + Sync,
+) -> Vec<anyhow::Result<TaskReport>> {
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<std::sync::Mutex<Option<anyhow::Result<TaskReport>>>> =
+        tasks.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    std::thread::scope(|s| {
+        for _ in 0..workers.max(1) {
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    let Some(task) = tasks.get(i) else { break };
+                    let r = check_task(elf, blob, task, dir);
+                    done(&r);
+                    *slots[i].lock().expect("slot") = Some(r);
+                }
+            });
+        }
+    });
+    slots
+        .into_iter()
+        .map(|m| m.into_inner().expect("slot").expect("every task ran"))
+        .collect()
+}

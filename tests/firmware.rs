@@ -1,0 +1,175 @@
+//! The cell-controller firmware, hard real time: the real `runtime/firmware` image for the
+//! Cortex-M7 under `qemu-system-arm -machine mps2-an500 -icount shift=0`, where SysTick counts
+//! are deterministic instruction counts. For every task of the example cell it must stay
+//! within the timing and RAM budgets and produce the host runtime's setpoint stream (same
+//! blob, same task block) within 1e-9 rad. `scripts/firmware.sh` installs QEMU and the
+//! toolchain when missing.
+
+mod common;
+
+use prf_offline::firmware::{
+    self, GOAL_TICK_INSTRUCTIONS, MAX_PLANNING_INSTRUCTIONS, MAX_STATIC_RAM, MAX_TICK_INSTRUCTIONS,
+    STREAM_TOLERANCE,
+};
+use prf_offline::tasks::{FloorTask, world_tasks};
+use prf_offline::world::World;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+fn dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let d = std::env::temp_dir().join(format!("prf-firmware-test-{}", std::process::id()));
+        std::fs::create_dir_all(&d).expect("temp dir");
+        d
+    })
+}
+
+fn blob() -> &'static Path {
+    static BLOB: OnceLock<PathBuf> = OnceLock::new();
+    BLOB.get_or_init(|| {
+        let path = dir().join("cell.blob");
+        common::write_two_demonstration_blob(&path);
+        path
+    })
+}
+
+fn elf() -> &'static Path {
+    static ELF: OnceLock<PathBuf> = OnceLock::new();
+    ELF.get_or_init(|| firmware::build().expect("building the firmware"))
+}
+
+fn task_block(t: &FloorTask, name: &str) -> PathBuf {
+    let mut buf = [0u8; 1024];
+    let n = prf_runtime::task_block::encode(&t.task(), &mut buf).expect("task block");
+    let path = dir().join(name);
+    std::fs::write(&path, &buf[..n]).expect("write task block");
+    path
+}
+
+#[test]
+fn every_task_meets_the_budgets_and_matches_the_host_stream() {
+    let tasks = world_tasks(&World::example());
+    assert_eq!(tasks.len(), 18);
+    let reports = firmware::check_tasks(elf(), blob(), &tasks, dir(), 2, |_| {});
+    let (mut tick_max, mut plan_max, mut ram_max, mut sum, mut ticks) = (0, 0, 0, 0, 0);
+    eprintln!("task                       ticks  plan Minstr  tick max  mean  RAM B   |Δq|");
+    for r in reports {
+        let r = r.expect("task ran");
+        let f = r
+            .run
+            .figures
+            .as_ref()
+            .unwrap_or_else(|| panic!("{}: no report\n{}", r.label, r.run.stdout));
+        assert_eq!(r.run.status, Some(0), "{}:\n{}", r.label, r.run.stdout);
+        let c = r
+            .comparison
+            .unwrap_or_else(|e| panic!("{}: firmware vs host: {e}", r.label));
+        eprintln!(
+            "{:<26} {:>6} {:>11.1} {:>9} {:>5} {:>6} {:.1e}",
+            r.label,
+            f.ticks,
+            f.planning_instructions as f64 / 1e6,
+            f.tick_max,
+            f.tick_mean,
+            f.ram_total,
+            c.arm
+        );
+        assert!(c.arm <= STREAM_TOLERANCE && c.base_goal <= STREAM_TOLERANCE);
+        assert_eq!(c.setpoints as u64, f.ticks);
+        assert!(
+            f.tick_max <= MAX_TICK_INSTRUCTIONS,
+            "{}: an executor tick took {} instructions (seq {})",
+            r.label,
+            f.tick_max,
+            f.tick_max_seq
+        );
+        assert!(
+            f.planning_instructions <= MAX_PLANNING_INSTRUCTIONS,
+            "{}: planning took {} instructions",
+            r.label,
+            f.planning_instructions
+        );
+        assert!(
+            f.ram_total <= MAX_STATIC_RAM,
+            "{}: static RAM {} B (data {} + bss {} + stack {})",
+            r.label,
+            f.ram_total,
+            f.ram_data,
+            f.ram_bss,
+            f.ram_stack
+        );
+        assert_eq!(f.overruns, 0, "{}", r.label);
+        assert!(f.feasible, "{}", r.label);
+        tick_max = tick_max.max(f.tick_max);
+        plan_max = plan_max.max(f.planning_instructions);
+        ram_max = ram_max.max(f.ram_total);
+        sum += f.tick_mean * f.ticks;
+        ticks += f.ticks;
+    }
+    eprintln!(
+        "all tasks: executor tick max {tick_max} mean {} instructions (budget {MAX_TICK_INSTRUCTIONS}, goal {GOAL_TICK_INSTRUCTIONS}); planning max {plan_max}; static RAM max {ram_max} B",
+        sum / ticks
+    );
+}
+
+#[test]
+fn runs_are_deterministic_and_the_self_contained_image_runs_alike() {
+    let t = FloorTask::new(&World::example(), "Part2", "Printer1", "CNC1").expect("task");
+    let block = task_block(&t, "image.task");
+    let blob = blob().to_path_buf();
+    let flashed = || {
+        let args = [
+            "--blob".as_ref(),
+            blob.as_os_str(),
+            "--task".as_ref(),
+            block.as_os_str(),
+        ];
+        firmware::run(elf(), args).expect("run")
+    };
+    let (a, b) = (flashed(), flashed());
+    assert_eq!(a.status, Some(0), "{}", a.stdout);
+    assert_eq!(a.stdout, b.stdout, "two runs under -icount shift=0 differ");
+    let image = firmware::image(&blob, &block).expect("image");
+    let c = firmware::run(&image, std::iter::empty::<&str>()).expect("run image");
+    assert_eq!(c.status, Some(0), "{}", c.stdout);
+    let (fa, fc) = (a.figures.expect("figures"), c.figures.expect("figures"));
+    assert_eq!(fa.crc32, fc.crc32, "the same setpoint stream");
+    assert_eq!(fa.ticks, fc.ticks);
+}
+
+#[test]
+fn bad_input_and_exceptions_exit_with_a_message() {
+    let t = FloorTask::new(&World::example(), "Part1", "CNC1", "Table1").expect("task");
+    let block = task_block(&t, "bad.task");
+    let good = std::fs::read(blob()).expect("blob");
+    let mut flipped = good.clone();
+    flipped[good.len() / 2] ^= 0x40;
+    let flipped_path = dir().join("flipped.blob");
+    std::fs::write(&flipped_path, flipped).expect("write");
+    let blob = blob().as_os_str();
+    let cases: [(&[&std::ffi::OsStr], i32, &str); 4] = [
+        (
+            &["--task".as_ref(), block.as_os_str()],
+            2,
+            "no blob at 0x00300000",
+        ),
+        (
+            &[
+                "--blob".as_ref(),
+                flipped_path.as_os_str(),
+                "--task".as_ref(),
+                block.as_os_str(),
+            ],
+            3,
+            "corrupt blob at 0x00300000",
+        ),
+        (&["--blob".as_ref(), blob], 4, "no task block"),
+        (&["--fault-test".as_ref()], 101, "HardFault at pc"),
+    ];
+    for (args, status, message) in cases {
+        let r = firmware::run(elf(), args).expect("run");
+        assert_eq!(r.status, Some(status), "{args:?}:\n{}", r.stdout);
+        assert!(r.stdout.contains(message), "{args:?}:\n{}", r.stdout);
+    }
+}
