@@ -193,5 +193,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if ok < run {
         bail!("{} task(s) faulted", run - ok);
     }
+    println!(
+        "the same blob on the cell-controller firmware (Cortex-M7 under QEMU, timing budgets, \
+         stream checked against the host): prf firmware {}",
+        blob.display()
+    );
     Ok(())
 }
