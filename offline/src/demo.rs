@@ -101,6 +101,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         t1.elapsed().as_secs_f64()
     );
     let rt = Runtime::load(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", blob.display()))?;
+    // The first task as a task block, for the firmware's self-contained image (its default).
+    if let Some(first) = tasks.first() {
+        let mut block = [0u8; 1024];
+        let n = prf_runtime::task_block::encode(&first.task(), &mut block)
+            .map_err(|e| anyhow::anyhow!("task block: {e}"))?;
+        let path = dir.join("task.bin");
+        std::fs::write(&path, &block[..n])
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
 
     // 3. The controller, a process of its own, on a cell name no one else uses.
     let cell_name = format!("demo-{}", std::process::id());

@@ -2,7 +2,8 @@
 //! linker's search path, where cortex-m-rt's `link.x` includes it. With the feature `embed`,
 //! checks the files to link into the BLOB and TASK regions: PRF_EMBED_BLOB (default: the
 //! example cell's `target/prf-demo/cell.blob`, written by `prf demo`) and PRF_EMBED_TASK
-//! (default `target/prf-demo/task.bin`, written by `prf plan … --task-block`).
+//! (default `target/prf-demo/task.bin`, the cell's first task, also written by `prf demo`;
+//! any task block from `prf plan … --task-block`).
 use std::path::PathBuf;
 
 fn main() {

@@ -190,13 +190,13 @@ fn execute(
     let sp = loop {
         block_on(ticker.next());
         let woke = counts();
-        late = late.max(woke - due);
+        late = late.max(woke.saturating_sub(due));
         let sp = ex.tick(t, &cell.measured);
         let used = counts() - woke;
         cell.apply(&sp, dt);
         let record = stream::encode(&sp);
         crc = crc32_update(crc, &record);
-        let work = counts() - due;
+        let work = counts().saturating_sub(due);
         busy = busy.max(work);
         misses += (work >= COUNTS_PER_PERIOD as u64) as u64;
         ticks += 1;
