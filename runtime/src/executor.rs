@@ -11,9 +11,10 @@
 //! several RDMP steps, so it is split into two units of one tick each, done ahead during the
 //! platform and gripper segments before it, where the arm holds still and ticks are cheap. An
 //! arm segment that could not be prepared ahead holds the arm for its first two ticks. A
-//! reversal's first resume is likewise done ahead ([`Reversal::prepare`]). A fault (timeout, tracking error, non-finite input, clock going
-//! backwards) moves the executor to `Fault`, which holds the last safe setpoint at rest and
-//! says why.
+//! reversal's first resume is likewise done ahead ([`Reversal::prepare`]).
+//!
+//! A fault (timeout, tracking error, non-finite input, clock going backwards) moves the
+//! executor to `Fault`, which holds the last safe setpoint at rest and says why.
 
 use crate::load::{LoadError, Runtime};
 use crate::program::{Program, Segment};
