@@ -7,6 +7,7 @@
 
 mod common;
 
+use common::{blob, dir};
 use prf_firmware_sim::clock::now_ns;
 use prf_firmware_sim::link::{self, Observer};
 use prf_offline::tasks::FloorTask;
@@ -18,10 +19,10 @@ use prf_shared::kinematics::ArmKinematics;
 use prf_shared::limits::MotionLimits;
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::Pose;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, ExitStatus};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -30,25 +31,6 @@ static SERIAL: Mutex<()> = Mutex::new(());
 
 /// The task every test runs.
 const TASK: [&str; 3] = ["Part1", "CNC1", "Table1"];
-
-fn dir() -> &'static Path {
-    static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let d = std::env::temp_dir().join(format!("prf-cell-test-{}", std::process::id()));
-        std::fs::create_dir_all(&d).expect("temp dir");
-        d
-    })
-}
-
-/// The blob of the paper's two diverse demonstrations (all 18 tasks feasible).
-fn blob() -> &'static Path {
-    static BLOB: OnceLock<PathBuf> = OnceLock::new();
-    BLOB.get_or_init(|| {
-        let path = dir().join("cell.blob");
-        common::write_two_demonstration_blob(&path);
-        path
-    })
-}
 
 fn floor_task() -> FloorTask {
     FloorTask::new(&World::example(), TASK[0], TASK[1], TASK[2]).expect("task")

@@ -7,6 +7,7 @@
 
 mod common;
 
+use common::{blob, dir};
 use prf_offline::firmware::{
     self, GOAL_TICK_INSTRUCTIONS, MAX_PLANNING_INSTRUCTIONS, MAX_STATIC_RAM, MAX_TICK_INSTRUCTIONS,
     STREAM_TOLERANCE,
@@ -15,24 +16,6 @@ use prf_offline::tasks::{FloorTask, world_tasks};
 use prf_offline::world::World;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
-
-fn dir() -> &'static Path {
-    static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let d = std::env::temp_dir().join(format!("prf-firmware-test-{}", std::process::id()));
-        std::fs::create_dir_all(&d).expect("temp dir");
-        d
-    })
-}
-
-fn blob() -> &'static Path {
-    static BLOB: OnceLock<PathBuf> = OnceLock::new();
-    BLOB.get_or_init(|| {
-        let path = dir().join("cell.blob");
-        common::write_two_demonstration_blob(&path);
-        path
-    })
-}
 
 fn elf() -> &'static Path {
     static ELF: OnceLock<PathBuf> = OnceLock::new();
