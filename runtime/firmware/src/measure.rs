@@ -29,15 +29,18 @@ pub struct Stack {
 }
 
 impl Stack {
-    /// Paints [`PAINT_BYTES`] below the current stack pointer. Call first thing in `main`.
+    /// Paints up to [`PAINT_BYTES`] below the current stack pointer, never below the end of
+    /// bss (on a controller with little RAM the stack grows towards it). Call first thing in
+    /// `main`.
     #[inline(always)]
     pub fn paint() -> Stack {
         let top = cortex_m::register::msp::read() as usize;
         let live = top - 256;
-        let bottom = live - PAINT_BYTES;
+        let bss_end = (&raw const __ebss as usize).next_multiple_of(4);
+        let bottom = live.saturating_sub(PAINT_BYTES).max(bss_end);
         for a in (bottom..live).step_by(4) {
-            // SAFETY: RAM below the live stack that nothing else uses (memory.x: 4 MiB RAM,
-            // data and bss at its start).
+            // SAFETY: RAM between the end of bss and the live stack: free, since cortex-m-rt
+            // puts the stack at the top of RAM and data and bss at its start.
             unsafe { core::ptr::write_volatile(a as *mut u32, PAINT) };
         }
         Stack { top, bottom }
