@@ -33,25 +33,32 @@ fn script() -> PathBuf {
     repository().join("scripts/firmware.sh")
 }
 
-/// Builds the firmware (installing the toolchain and QEMU when missing); the ELF's path.
-pub fn build() -> anyhow::Result<PathBuf> {
+/// Runs `scripts/firmware.sh` with `args` (a subcommand that builds): the ELF path it prints
+/// last.
+fn built_elf(args: &[&std::ffi::OsStr]) -> anyhow::Result<PathBuf> {
+    let what = format!("scripts/firmware.sh {}", args[0].to_string_lossy());
     let out = Command::new("bash")
         .arg(script())
-        .arg("build")
+        .args(args)
         .output()
-        .context("running scripts/firmware.sh build")?;
+        .with_context(|| format!("running {what}"))?;
     if !out.status.success() {
         bail!(
-            "scripts/firmware.sh build failed ({}):\n{}",
+            "{what} failed ({}):\n{}",
             out.status,
             String::from_utf8_lossy(&out.stderr)
         );
     }
     let stdout = String::from_utf8_lossy(&out.stdout);
     let Some(elf) = stdout.lines().last() else {
-        bail!("scripts/firmware.sh build printed no path");
+        bail!("{what} printed no path");
     };
     Ok(repository().join(elf.trim()))
+}
+
+/// Builds the firmware (installing the toolchain and QEMU when missing); the ELF's path.
+pub fn build() -> anyhow::Result<PathBuf> {
+    built_elf(&["build".as_ref()])
 }
 
 /// What the firmware printed, parsed.
@@ -156,25 +163,7 @@ where
 /// Builds the self-contained image with `blob` and `task` linked in (feature `embed`); its
 /// path.
 pub fn image(blob: &Path, task: &Path) -> anyhow::Result<PathBuf> {
-    let out = Command::new("bash")
-        .arg(script())
-        .arg("image")
-        .arg(blob)
-        .arg(task)
-        .output()
-        .context("running scripts/firmware.sh image")?;
-    if !out.status.success() {
-        bail!(
-            "scripts/firmware.sh image failed ({}):\n{}",
-            out.status,
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let Some(elf) = stdout.lines().last() else {
-        bail!("scripts/firmware.sh image printed no path");
-    };
-    Ok(repository().join(elf.trim()))
+    built_elf(&["image".as_ref(), blob.as_os_str(), task.as_os_str()])
 }
 
 /// Reads a setpoint stream the firmware wrote.
