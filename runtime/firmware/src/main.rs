@@ -181,8 +181,9 @@ fn execute(
     let dt = rt.config.rdmp.dt;
     let period = Duration::from_hz(TICK_HZ as u64);
     let mut t = Instant::from_ticks(0);
-    let (mut ticks, mut max, mut sum, mut late, mut busy, mut misses) = (0u64, 0, 0, 0, 0, 0);
-    let mut worst = (0u32, Mode::Base);
+    let (mut late, mut busy, mut misses) = (0u64, 0, 0);
+    // The slowest executor tick: instructions' counts, seq, mode.
+    let mut worst = (0u64, 0u32, Mode::Base);
     // Per mode (Base, Arm, Gripper, Done, Fault): ticks, max, sum.
     let mut by_mode = [(0u64, 0u64, 0u64); 5];
     let mut crc = 0;
@@ -199,12 +200,9 @@ fn execute(
         let work = counts().saturating_sub(due);
         busy = busy.max(work);
         misses += (work >= COUNTS_PER_PERIOD as u64) as u64;
-        ticks += 1;
-        if used > max {
-            max = used;
-            worst = (sp.seq, sp.mode);
+        if used > worst.0 {
+            worst = (used, sp.seq, sp.mode);
         }
-        sum += used;
         let m = &mut by_mode[sp.mode as usize];
         *m = (m.0 + 1, m.1.max(used), m.2 + used);
         let end = matches!(sp.mode, Mode::Done | Mode::Fault);
@@ -238,12 +236,14 @@ fn execute(
         t += period;
         due += COUNTS_PER_PERIOD as u64;
     };
+    let ticks: u64 = by_mode.iter().map(|m| m.0).sum();
+    let sum: u64 = by_mode.iter().map(|m| m.2).sum();
     hprintln!(
         "ticks {} executor max {} (seq {} {:?}) mean {} instructions; loop max {} wake-up lateness max {} instructions; overruns {}",
         ticks,
-        max * k,
-        worst.0,
+        worst.0 * k,
         worst.1,
+        worst.2,
         sum * k / ticks.max(1),
         busy * k,
         late * k,
