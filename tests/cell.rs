@@ -8,17 +8,17 @@
 mod common;
 
 use common::{blob, dir};
-use prf_firmware_sim::clock::now_ns;
-use prf_firmware_sim::link::{self, Observer};
-use prf_offline::tasks::FloorTask;
-use prf_offline::world::{Planar, World};
+use prf_ipc::clock::now_ns;
+use prf_ipc::link::{self, Observer};
+use prf_ipc::messages::{JointStateMsg, SetpointMsg, flags, mode, status};
 use prf_runtime::executor::planar;
 use prf_shared::NA;
-use prf_shared::ipc::{JointStateMsg, SetpointMsg, flags, mode, status};
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::limits::MotionLimits;
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::Pose;
+use prf_sim::tasks::FloorTask;
+use prf_sim::world::{Planar, World};
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus};
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -12,8 +12,8 @@ use prf_offline::firmware::{
     self, GOAL_TICK_INSTRUCTIONS, MAX_PLANNING_INSTRUCTIONS, MAX_STATIC_RAM, MAX_TICK_INSTRUCTIONS,
     STREAM_TOLERANCE,
 };
-use prf_offline::tasks::{FloorTask, world_tasks};
-use prf_offline::world::World;
+use prf_sim::tasks::{FloorTask, world_tasks};
+use prf_sim::world::World;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -23,10 +23,8 @@ fn elf() -> &'static Path {
 }
 
 fn task_block(t: &FloorTask, name: &str) -> PathBuf {
-    let mut buf = [0u8; 1024];
-    let n = prf_runtime::task_block::encode(&t.task(), &mut buf).expect("task block");
     let path = dir().join(name);
-    std::fs::write(&path, &buf[..n]).expect("write task block");
+    std::fs::write(&path, t.task_block().expect("task block")).expect("write task block");
     path
 }
 

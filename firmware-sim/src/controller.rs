@@ -4,16 +4,16 @@
 //! the arm and the platform brake to standstill with Ruckig. Every cycle publishes the
 //! measured state. A refused setpoint also brakes; the next session (flag FIRST) clears it.
 
-use crate::clock::now_ns;
 use crate::guard::{Admission, Guard};
-use crate::link::{self, ControllerPorts};
-use crate::motion::{DT, Online};
 use crate::servo::{ArmServo, ServoConfig};
 use anyhow::{Context, Result};
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
+use prf_ipc::clock::now_ns;
+use prf_ipc::link::{self, ControllerPorts};
+use prf_ipc::messages::{JointStateMsg, SetpointMsg, flags, status};
+use prf_ruckig::{DT, Online};
 use prf_shared::NA;
-use prf_shared::ipc::{JointStateMsg, SetpointMsg, flags, status};
 use prf_shared::limits::MotionLimits;
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::wrap;
@@ -251,7 +251,8 @@ pub fn run(cfg: &Config) -> Result<Summary> {
             lost: g.lost,
             repeated: g.repeated,
             rejected: g.rejected,
-        })
+        })?;
+        Ok(())
     };
 
     'cycle: loop {

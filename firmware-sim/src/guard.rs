@@ -2,8 +2,8 @@
 //! must keep to be followed (finite, inside the joint limits, no faster than the speed limits
 //! from the previous setpoint).
 
+use prf_ipc::messages::{SetpointMsg, flags};
 use prf_shared::NA;
-use prf_shared::ipc::{SetpointMsg, flags};
 use prf_shared::limits::MotionLimits;
 use prf_shared::robot::RobotModel;
 

@@ -5,9 +5,6 @@
 //! standstill (Ruckig) when the setpoints stop.
 
 pub mod cli;
-pub mod clock;
 pub mod controller;
 pub mod guard;
-pub mod link;
-pub mod motion;
 pub mod servo;

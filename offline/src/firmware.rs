@@ -3,12 +3,12 @@
 //! line), read the figures it prints and the setpoint stream it writes, and compare that
 //! stream with the host runtime's for the same blob and task block.
 
-use crate::execute::execute;
-use crate::tasks::FloorTask;
 use anyhow::{Context, bail};
+use prf_host::ideal::execute;
 use prf_runtime::executor::{ExecutorConfig, Mode, Setpoint};
 use prf_runtime::stream::{RECORD_LEN, Record, decode};
 use prf_runtime::{Runtime, plan, task_block};
+use prf_sim::tasks::FloorTask;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

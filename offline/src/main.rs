@@ -1,23 +1,15 @@
 //! `prf`: host tools of the PRF cell runtime.
 
-mod alloc_count;
 mod bench;
-mod bench_cell;
-mod check;
-mod demo;
-mod firmware_cmd;
-mod generate;
-mod learn_cmd;
-mod plan_cmd;
-mod plot;
-mod rdmp_demo;
-mod run_cmd;
+mod cli;
+mod figures;
 mod synthetic;
 
 use clap::{Parser, Subcommand};
+use cli::{check_dataset, demo, firmware, generate, inspect, learn, plan, rdmp_demo, run};
 
 #[global_allocator]
-static ALLOCATOR: alloc_count::Counting = alloc_count::Counting;
+static ALLOCATOR: bench::alloc_count::Counting = bench::alloc_count::Counting;
 
 /// PRF — program a robot cell by reusing its old programs.
 ///
@@ -39,34 +31,34 @@ enum Command {
     RdmpDemo(rdmp_demo::Args),
     /// Micro-benchmarks of the math core (medians, with the paper's SVD formulation as the
     /// baseline in the same process).
-    Bench(bench::Args),
+    Bench(bench::math::Args),
     /// Generate the demonstration dataset of a cell (default: the built-in example cell, all
     /// 64 afforded tasks) with the ground-truth motion planner.
     Gen(generate::Args),
     /// Validate a dataset directory (format, ids, time, limits); with `--world`, re-check every
     /// program against the ground-truth cell.
-    CheckDataset(check::Args),
+    CheckDataset(check_dataset::Args),
     /// Learn affordances, workspaces and skills from a dataset (Alg. 3) and compile the blob.
-    Learn(learn_cmd::Args),
+    Learn(learn::Args),
     /// Validate a blob and print its contents and size by section.
-    Inspect(learn_cmd::InspectArgs),
+    Inspect(inspect::Args),
     /// Plan a task with the runtime (task plan, SkillPlan-PTT with minimum risk), print the
     /// choice, optionally export the program at 1 kHz; `--all` plans every task of the cell.
-    Plan(plan_cmd::Args),
+    Plan(plan::Args),
     /// Plan one task and execute it in real time on the host cell (1 kHz, embassy-time, Ruckig
     /// output stage) against firmware-sim over iceoryx2 shared memory.
-    Run(run_cmd::Args),
+    Run(run::Args),
     /// Host cell figures: setpoint latency through iceoryx2 against a Unix socket, the 1 kHz
     /// loop's jitter and deadline misses against firmware-sim, Ruckig's per-update cost.
-    BenchCell(bench_cell::Args),
+    BenchCell(bench::cell::Args),
     /// Run tasks on the cell-controller firmware (Cortex-M7 under QEMU mps2-an500, blob flashed
     /// into its region) and check each against the host: executor tick, planning and RAM
     /// budgets, and the setpoint stream within 1e-9 rad. Installs QEMU and the toolchain if
     /// missing.
-    Firmware(firmware_cmd::Args),
+    Firmware(firmware::Args),
     /// Receiving side of `prf bench-cell`'s latency comparison.
     #[command(hide = true)]
-    IpcPeer(bench_cell::PeerArgs),
+    IpcPeer(bench::cell::PeerArgs),
     /// The simulated iiwa joint controller (same as the `prf-firmware-sim` binary).
     FirmwareSim(prf_firmware_sim::cli::Args),
 }
@@ -76,16 +68,16 @@ fn main() -> anyhow::Result<()> {
         None => demo::run(&demo::Args::default()),
         Some(Command::Demo(args)) => demo::run(&args),
         Some(Command::RdmpDemo(args)) => rdmp_demo::run(&args),
-        Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Bench(args)) => bench::math::run(&args),
         Some(Command::Gen(args)) => generate::run(&args),
-        Some(Command::CheckDataset(args)) => check::run(&args),
-        Some(Command::Learn(args)) => learn_cmd::run(&args),
-        Some(Command::Inspect(args)) => learn_cmd::inspect(&args),
-        Some(Command::Plan(args)) => plan_cmd::run(&args),
-        Some(Command::Run(args)) => run_cmd::run(&args),
-        Some(Command::BenchCell(args)) => bench_cell::run(&args),
-        Some(Command::Firmware(args)) => firmware_cmd::run(&args),
-        Some(Command::IpcPeer(args)) => bench_cell::peer(&args),
+        Some(Command::CheckDataset(args)) => check_dataset::run(&args),
+        Some(Command::Learn(args)) => learn::run(&args),
+        Some(Command::Inspect(args)) => inspect::run(&args),
+        Some(Command::Plan(args)) => plan::run(&args),
+        Some(Command::Run(args)) => run::run(&args),
+        Some(Command::BenchCell(args)) => bench::cell::run(&args),
+        Some(Command::Firmware(args)) => firmware::run(&args),
+        Some(Command::IpcPeer(args)) => bench::cell::peer(&args),
         Some(Command::FirmwareSim(args)) => prf_firmware_sim::cli::run(&args),
     }
 }

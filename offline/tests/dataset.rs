@@ -4,9 +4,7 @@
 mod common;
 
 use common::TempDir;
-use prf_offline::dataset::{
-    Dataset, Demonstration, ErrorKind, Instance, Placed, Sample, TaskRecord,
-};
+use prf_files::dataset::{Dataset, Demonstration, ErrorKind, Instance, Placed, Sample, TaskRecord};
 use prf_shared::robot::RobotModel;
 use std::path::Path;
 

@@ -9,18 +9,17 @@
 mod common;
 
 use common::TempDir;
-use indicatif::ProgressBar;
-use prf_offline::dataset::{Dataset, Demonstration};
-use prf_offline::demogen::generate_dataset;
-use prf_offline::validate::{self, LIMIT_TOLERANCE, MotionLimits};
-use prf_offline::world::World;
-use prf_offline::world::geometry::Cell;
+use prf_files::dataset::{Dataset, Demonstration};
 use prf_shared::JointVector;
 use prf_shared::kinematics::{ArmKinematics, arm_base_pose};
 use prf_shared::nullspace::kernel;
 use prf_shared::rdmp::RdmpConfig;
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::{Pose, pose_error, pose_from_array};
+use prf_sim::demogen::generate_dataset;
+use prf_sim::validate::{self, LIMIT_TOLERANCE, MotionLimits};
+use prf_sim::world::World;
+use prf_sim::world::geometry::Cell;
 use rayon::prelude::*;
 
 /// TCP pose in the world of a sample.
@@ -40,7 +39,7 @@ fn check_grip_events(world: &World, model: &RobotModel, d: &Demonstration) {
     assert_eq!(events.len(), 2, "{}: one close and one open", d.id);
     let (close, open) = (&d.samples[events[0]], &d.samples[events[1]]);
     assert_eq!((close.gripper, open.gripper), (1.0, 0.0), "{}", d.id);
-    let grasp_of = |part: &Pose, s: &prf_offline::dataset::Sample| {
+    let grasp_of = |part: &Pose, s: &prf_files::dataset::Sample| {
         let rel = part.inverse() * tcp(model, s.base, s.arm);
         part_type
             .grasps
@@ -70,8 +69,8 @@ fn generated_dataset_is_collision_free_within_limits_and_does_the_task() {
     let model = RobotModel::kmr_iiwa14();
     let afforded = world.afforded_tasks();
     let started = std::time::Instant::now();
-    let dataset =
-        generate_dataset(&world, &afforded, 1, 100.0, &ProgressBar::hidden()).expect("generate");
+    let dataset = generate_dataset(&world, &afforded, 1, 100.0, &prf_files::progress::quiet)
+        .expect("generate");
     let generated = started.elapsed();
     assert_eq!(dataset.demonstrations.len(), 64);
 
@@ -188,11 +187,11 @@ fn generated_dataset_is_collision_free_within_limits_and_does_the_task() {
 fn generation_is_deterministic_for_a_seed() {
     let world = World::example();
     let pick = [world.afforded_tasks()[13], world.afforded_tasks()[40]];
-    let a = generate_dataset(&world, &pick, 7, 100.0, &ProgressBar::hidden()).expect("a");
-    let b = generate_dataset(&world, &pick, 7, 100.0, &ProgressBar::hidden()).expect("b");
+    let a = generate_dataset(&world, &pick, 7, 100.0, &prf_files::progress::quiet).expect("a");
+    let b = generate_dataset(&world, &pick, 7, 100.0, &prf_files::progress::quiet).expect("b");
     assert!(a == b, "same seed, same programs");
     // Another seed may plan other paths (when the direct one is blocked), never another task.
-    let c = generate_dataset(&world, &pick, 8, 100.0, &ProgressBar::hidden()).expect("c");
+    let c = generate_dataset(&world, &pick, 8, 100.0, &prf_files::progress::quiet).expect("c");
     for (x, y) in a.demonstrations.iter().zip(&c.demonstrations) {
         assert_eq!(
             (&x.task.part, &x.task.from, &x.task.to, x.task.goal),
@@ -205,7 +204,7 @@ fn generation_is_deterministic_for_a_seed() {
 fn sample_rate_is_configurable() {
     let world = World::example();
     let pick = [world.afforded_tasks()[0]];
-    let d = generate_dataset(&world, &pick, 1, 250.0, &ProgressBar::hidden()).expect("gen");
+    let d = generate_dataset(&world, &pick, 1, 250.0, &prf_files::progress::quiet).expect("gen");
     let s = &d.demonstrations[0].samples;
     assert!((s[1].t - s[0].t - 0.004).abs() < 1e-12);
     assert!(s.windows(2).all(|w| (w[1].t - w[0].t - 0.004).abs() < 1e-9));

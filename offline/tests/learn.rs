@@ -5,14 +5,11 @@
 mod common;
 
 use common::TempDir;
-use indicatif::ProgressBar;
 use nalgebra::Vector3;
-use prf_offline::compile::compile;
-use prf_offline::dataset::{Dataset, Demonstration};
-use prf_offline::demogen::generate_dataset;
-use prf_offline::learn::workspace::Sweep;
-use prf_offline::learn::{Knowledge, LearnConfig, affordance, learn};
-use prf_offline::world::World;
+use prf_files::dataset::{Dataset, Demonstration};
+use prf_learn::compile;
+use prf_learn::workspace::Sweep;
+use prf_learn::{Knowledge, LearnConfig, affordance, learn};
 use prf_shared::JointVector;
 use prf_shared::blob::{Blob, BlobError, HEADER_LEN, crc32};
 use prf_shared::field::{DistanceField, Field};
@@ -21,6 +18,8 @@ use prf_shared::motion::{CLASSES, TaskLocation};
 use prf_shared::risk::RiskAccumulator;
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::{Pose, pose_from_array};
+use prf_sim::demogen::generate_dataset;
+use prf_sim::world::World;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use std::sync::OnceLock;
 
@@ -38,8 +37,8 @@ fn fixture() -> &'static Fixture {
         let world = World::example();
         let model = RobotModel::kmr_iiwa14();
         let all = world.afforded_tasks();
-        let generated =
-            generate_dataset(&world, &all, 1, 100.0, &ProgressBar::hidden()).expect("generation");
+        let generated = generate_dataset(&world, &all, 1, 100.0, &prf_files::progress::quiet)
+            .expect("generation");
         let dir = TempDir::new("learn");
         generated.write(dir.path()).expect("write");
         let dataset = Dataset::read(dir.path(), &model).expect("read");
@@ -47,7 +46,7 @@ fn fixture() -> &'static Fixture {
             &dataset,
             &model,
             &LearnConfig::default(),
-            &ProgressBar::hidden(),
+            &prf_files::progress::quiet,
         )
         .expect("learn");
         Fixture {

@@ -1,13 +1,13 @@
 //! The generator's building blocks: IK, LSPB timing and RRT-Connect, each against an
 //! independent check (forward kinematics, finite differences, dense edge re-checks).
 
-use prf_offline::demogen::ik::{self, IkConfig, IkError};
-use prf_offline::demogen::rrt::{self, RrtConfig, RrtError, Space};
-use prf_offline::demogen::timing::{Limits, Motion};
 use prf_shared::JointVector;
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::pose_error;
+use prf_sim::demogen::ik::{self, IkConfig, IkError};
+use prf_sim::demogen::rrt::{self, RrtConfig, RrtError, Space};
+use prf_sim::demogen::timing::{Limits, Motion};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 
 #[test]

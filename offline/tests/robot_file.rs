@@ -1,6 +1,6 @@
 //! The robot model compiled from the shipped URDF + sphere file equals the built-in model.
 
-use prf_offline::robot_file;
+use prf_files::robot;
 use prf_shared::JointVector;
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::robot::RobotModel;
@@ -8,7 +8,7 @@ use rand::{RngExt, SeedableRng, rngs::StdRng};
 
 #[test]
 fn urdf_model_has_the_built_in_kinematics() {
-    let urdf = robot_file::example().expect("shipped files");
+    let urdf = robot::example().expect("shipped files");
     let built_in = RobotModel::kmr_iiwa14();
     let close = |a: &prf_shared::se3::Pose, b: &prf_shared::se3::Pose| {
         let d = a.inverse() * b;
@@ -44,8 +44,8 @@ fn urdf_model_has_the_built_in_kinematics() {
 
 #[test]
 fn robot_file_errors_name_the_file_and_line() {
-    let bad = robot_file::EXAMPLE_SPHERES.replace("\"iiwa_link_3\"", "\"iiwa_link_9\"");
-    let e = robot_file::parse(robot_file::EXAMPLE_URDF, "r.urdf", &bad, "s.json")
+    let bad = robot::EXAMPLE_SPHERES.replace("\"iiwa_link_3\"", "\"iiwa_link_9\"");
+    let e = robot::parse(robot::EXAMPLE_URDF, "r.urdf", &bad, "s.json")
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("s.json:") && e.contains("iiwa_link_9"), "{e}");
@@ -54,15 +54,15 @@ fn robot_file_errors_name_the_file_and_line() {
         bad.lines().nth(line - 1).map(|l| l.contains("iiwa_link_9")),
         Some(true)
     );
-    let e = robot_file::parse(
+    let e = robot::parse(
         "<robot name=\"x\"></robot>",
         "r.urdf",
-        robot_file::EXAMPLE_SPHERES,
+        robot::EXAMPLE_SPHERES,
         "s.json",
     )
     .unwrap_err()
     .to_string();
     assert!(e.starts_with("r.urdf:"), "{e}");
-    let no_joint = robot_file::EXAMPLE_URDF.replace("type=\"revolute\"", "type=\"fixed\"");
-    assert!(robot_file::parse(&no_joint, "r.urdf", robot_file::EXAMPLE_SPHERES, "s.json").is_err());
+    let no_joint = robot::EXAMPLE_URDF.replace("type=\"revolute\"", "type=\"fixed\"");
+    assert!(robot::parse(&no_joint, "r.urdf", robot::EXAMPLE_SPHERES, "s.json").is_err());
 }

@@ -2,12 +2,7 @@
 //! soundness against the ground-truth cell, SkillPlan-PTT against a brute-force grid, the
 //! executor against the planner, and bad input.
 
-use indicatif::ProgressBar;
-use prf_offline::compile::blob_of_demonstrations;
-use prf_offline::execute::{Execution, execute};
-use prf_offline::tasks::{FloorTask, world_tasks};
-use prf_offline::world::World;
-use prf_offline::world::geometry::Cell;
+use prf_host::ideal::{Execution, execute};
 use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode};
 use prf_runtime::plan::{PlanError, plan};
 use prf_runtime::program::Segment;
@@ -19,6 +14,10 @@ use prf_shared::JointVector;
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::rdmp::integrate;
 use prf_shared::risk::RiskAccumulator;
+use prf_sim::blob_of_demonstrations;
+use prf_sim::tasks::{FloorTask, world_tasks};
+use prf_sim::world::World;
+use prf_sim::world::geometry::Cell;
 use std::sync::OnceLock;
 
 /// A blob learned from the example cell's afforded tasks selected by `keep`.
@@ -40,7 +39,7 @@ fn blob_of(
             )
         })
         .collect();
-    blob_of_demonstrations(world, &chosen, &ProgressBar::hidden()).expect("blob")
+    blob_of_demonstrations(world, &chosen, &prf_files::progress::quiet).expect("blob")
 }
 
 /// The blob of all 64 demonstrations (once).

@@ -4,9 +4,9 @@
 mod common;
 
 use nalgebra::Vector3;
-use prf_offline::world::geometry::{Cell, Contact, Obstacle, box_signed_distance};
-use prf_offline::world::{World, planar};
 use prf_shared::robot::RobotModel;
+use prf_sim::world::geometry::{Cell, Contact, Obstacle, box_signed_distance};
+use prf_sim::world::{World, planar};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use std::path::Path;
 
@@ -64,7 +64,7 @@ fn line_with(text: &str, needle: &str) -> usize {
 
 #[test]
 fn world_errors_name_file_line_and_value() {
-    let good = prf_offline::world::EXAMPLE_WORLD;
+    let good = prf_sim::world::EXAMPLE_WORLD;
     // A box with min ≥ max.
     let bad = good.replace(
         "\"bed\", \"min\": [-0.80, -0.50, 0.60], \"max\": [-0.10, 0.50, 0.85]",

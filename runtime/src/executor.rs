@@ -65,19 +65,36 @@ pub struct Measured {
     pub gripper: f64,
 }
 
-/// What the executor is doing.
+/// What the executor is doing. Its `u8` value is the one encoding of the mode everywhere
+/// (setpoint records, IPC messages, the firmware's per-mode figures).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Mode {
     /// Waiting for the platform to reach `base_goal`.
-    Base,
+    Base = 0,
     /// Moving the arm.
-    Arm,
+    Arm = 1,
     /// Waiting for the gripper.
-    Gripper,
+    Gripper = 2,
     /// Program complete; holding.
-    Done,
+    Done = 3,
     /// Stopped by a fault; holding the last safe setpoint.
-    Fault,
+    Fault = 4,
+}
+
+impl Mode {
+    /// The mode of an encoded value, None for a value no mode has.
+    pub fn from_u8(v: u8) -> Option<Mode> {
+        [
+            Mode::Base,
+            Mode::Arm,
+            Mode::Gripper,
+            Mode::Done,
+            Mode::Fault,
+        ]
+        .get(v as usize)
+        .copied()
+    }
 }
 
 /// One setpoint, once per tick.
@@ -95,6 +112,25 @@ pub struct Setpoint {
     pub mode: Mode,
     /// Index of the program segment.
     pub segment: u8,
+}
+
+impl Setpoint {
+    /// The program is over: done, or stopped by a fault. The last setpoint a drive loop sends.
+    pub fn is_final(&self) -> bool {
+        matches!(self.mode, Mode::Done | Mode::Fault)
+    }
+}
+
+/// What an executor drives: where the measured state comes from and where each setpoint goes
+/// (the ideal cell, the host cell's output stage, a real drive). One [`Executor::step`] per
+/// tick hands them over in the one order every platform uses: measure → tick → command.
+pub trait Plant {
+    /// Why the plant could not take a setpoint.
+    type Error;
+    /// The state measured now.
+    fn measured(&self) -> Measured;
+    /// Takes the tick's setpoint.
+    fn command(&mut self, sp: &Setpoint) -> Result<(), Self::Error>;
 }
 
 /// Why the executor stopped.
@@ -140,10 +176,21 @@ impl core::fmt::Display for Fault {
             ),
             Fault::NonFinite => write!(f, "the measured state is not finite"),
             Fault::ClockBackwards => write!(f, "time went backwards"),
-            Fault::Rdmp { segment, error } => write!(f, "segment {segment}: RDMP {error:?}"),
-            Fault::Reverse { segment, error } => write!(f, "segment {segment}: reversal {error:?}"),
+            Fault::Rdmp { segment, error } => write!(f, "segment {segment}: RDMP: {error}"),
+            Fault::Reverse { segment, error } => write!(f, "segment {segment}: reversal: {error}"),
             Fault::Program { segment } => write!(f, "segment {segment} is malformed"),
             Fault::Load(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl core::error::Error for Fault {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            Fault::Rdmp { error, .. } => Some(error),
+            Fault::Reverse { error, .. } => Some(error),
+            Fault::Load(e) => Some(e),
+            _ => None,
         }
     }
 }
@@ -237,6 +284,15 @@ impl<'r, 'a> Executor<'r, 'a> {
         sp.t = now;
         self.last = sp;
         sp
+    }
+
+    /// One drive step: the plant's measured state → [`Executor::tick`] → the setpoint
+    /// commanded to the plant. Every drive loop (ideal cell, bench, host cell, firmware) is a
+    /// sequence of these, one per tick, until [`Setpoint::is_final`].
+    pub fn step<P: Plant>(&mut self, now: Instant, plant: &mut P) -> Result<Setpoint, P::Error> {
+        let sp = self.tick(now, &plant.measured());
+        plant.command(&sp)?;
+        Ok(sp)
     }
 
     fn finish_segment(&mut self) {

@@ -3,7 +3,7 @@
 //! KMR's speed. The host's `prf plan --export` and tests, and the cell-controller firmware, run
 //! the same plant, so their setpoint streams can be compared number for number.
 
-use crate::executor::{Measured, Setpoint, planar, wrap};
+use crate::executor::{Measured, Plant, Setpoint, planar, wrap};
 use prf_shared::NA;
 use prf_shared::se3::Pose;
 
@@ -17,21 +17,27 @@ pub const GRIPPER_RATE: f64 = 2.0;
 #[derive(Clone, Copy, Debug)]
 pub struct IdealCell {
     pub measured: Measured,
+    /// The tick, s.
+    pub dt: f64,
 }
 
 impl IdealCell {
-    pub fn new(arm: [f64; NA], home: &Pose) -> Self {
+    /// At rest with the arm at `arm`, the platform at `home` and the gripper open, ticked
+    /// every `dt` s.
+    pub fn new(arm: [f64; NA], home: &Pose, dt: f64) -> Self {
         IdealCell {
             measured: Measured {
                 arm,
                 base: planar(home),
                 gripper: 0.0,
             },
+            dt,
         }
     }
 
-    /// Advances the cell by `dt` under setpoint `sp`.
-    pub fn apply(&mut self, sp: &Setpoint, dt: f64) {
+    /// Advances the cell by one tick under setpoint `sp`.
+    pub fn apply(&mut self, sp: &Setpoint) {
+        let dt = self.dt;
         let m = &mut self.measured;
         m.arm = sp.arm;
         let target = if sp.close_gripper { 1.0 } else { 0.0 };
@@ -46,5 +52,18 @@ impl IdealCell {
         }
         let dyaw = wrap(sp.base_goal[2] - m.base[2]);
         m.base[2] += dyaw.clamp(-BASE_YAW_RATE * dt, BASE_YAW_RATE * dt);
+    }
+}
+
+impl Plant for IdealCell {
+    type Error = core::convert::Infallible;
+
+    fn measured(&self) -> Measured {
+        self.measured
+    }
+
+    fn command(&mut self, sp: &Setpoint) -> Result<(), Self::Error> {
+        self.apply(sp);
+        Ok(())
     }
 }

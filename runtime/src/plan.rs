@@ -64,12 +64,16 @@ impl core::fmt::Display for PlanError<'_> {
                 Ok(())
             }
             PlanError::NoActionPlan => write!(f, "no action plan reaches the goal state"),
-            PlanError::Skill(e) => write!(f, "skill planning failed: {e:?}"),
-            PlanError::Program(e) => write!(f, "the chosen skills do not form a program: {e:?}"),
+            PlanError::Skill(e) => write!(f, "skill planning failed: {e}"),
+            PlanError::Program(e) => write!(f, "the chosen skills do not form a program: {e}"),
             PlanError::Load(e) => write!(f, "{e}"),
         }
     }
 }
+
+/// A `PlanError` borrows the task's names (`Missing<'t>`), so it converts into a `'static`
+/// error box only once the task outlives it; callers format it (`{e}`) instead.
+impl core::error::Error for PlanError<'_> {}
 
 /// Plans `task`: validation, symbolic feasibility (Sec. 6.1), forward task planning,
 /// SkillPlan-PTT (Alg. 4), program.

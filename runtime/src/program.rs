@@ -46,6 +46,32 @@ pub enum ProgramError {
     TooLong,
 }
 
+impl core::fmt::Display for ProgramError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ProgramError::Load(e) => write!(f, "{e}"),
+            ProgramError::Realization { action } => write!(
+                f,
+                "action {action} of the plan lacks the goal or skill its motion needs"
+            ),
+            ProgramError::Reverse(e) => write!(f, "an arm motion cannot be reversed: {e}"),
+            ProgramError::TooLong => {
+                write!(f, "the program has more than {MAX_SEGMENTS} segments")
+            }
+        }
+    }
+}
+
+impl core::error::Error for ProgramError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            ProgramError::Load(e) => Some(e),
+            ProgramError::Reverse(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
 impl From<LoadError> for ProgramError {
     fn from(e: LoadError) -> Self {
         ProgramError::Load(e)

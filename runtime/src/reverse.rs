@@ -212,6 +212,30 @@ pub enum ReverseError {
     Rdmp(RdmpError),
 }
 
+impl core::fmt::Display for ReverseError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ReverseError::TooLong { steps } => write!(
+                f,
+                "the motion has {steps} steps, at most {MAX_STEPS} can be played backwards"
+            ),
+            ReverseError::MissingCheckpoint => {
+                write!(f, "the forward motion was not recorded from its start")
+            }
+            ReverseError::Rdmp(e) => write!(f, "re-integrating the forward motion failed: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for ReverseError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            ReverseError::Rdmp(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
 impl From<RdmpError> for ReverseError {
     fn from(e: RdmpError) -> Self {
         ReverseError::Rdmp(e)

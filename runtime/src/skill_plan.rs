@@ -104,6 +104,35 @@ pub enum SkillPlanError {
     TooManyAffordances,
 }
 
+impl core::fmt::Display for SkillPlanError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            SkillPlanError::Load(e) => write!(f, "{e}"),
+            SkillPlanError::UnsupportedPlan => write!(
+                f,
+                "the action plan is not Move, Pick, Move, Place, Move (the only plan SkillPlan-PTT takes)"
+            ),
+            SkillPlanError::TooManySkills => write!(
+                f,
+                "a motion class has more skills than the planner holds ({MAX_SKILLS})"
+            ),
+            SkillPlanError::TooManyAffordances => write!(
+                f,
+                "more stances × grasps than the planner holds ({MAX_GOALS})"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for SkillPlanError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            SkillPlanError::Load(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
 impl From<LoadError> for SkillPlanError {
     fn from(e: LoadError) -> Self {
         SkillPlanError::Load(e)

@@ -57,6 +57,8 @@ impl core::fmt::Display for Missing<'_> {
     }
 }
 
+impl core::error::Error for Missing<'_> {}
+
 /// Everything a task lacks, in the order the checks run.
 pub type MissingList<'t> = heapless::Vec<Missing<'t>, 8>;
 
@@ -85,6 +87,8 @@ impl core::fmt::Display for TaskError {
         }
     }
 }
+
+impl core::error::Error for TaskError {}
 
 fn finite(p: &Pose) -> bool {
     p.translation.vector.iter().all(|v| v.is_finite())

@@ -39,6 +39,8 @@ impl core::fmt::Display for TaskBlockError {
     }
 }
 
+impl core::error::Error for TaskBlockError {}
+
 /// The serialized task: (id, type) names and poses as `[x, y, z, qw, qx, qy, qz]`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TaskRecord<'a> {

@@ -90,17 +90,19 @@ impl core::fmt::Display for BlobError {
             BlobError::Decode { section, index } => {
                 write!(f, "{section:?} record {index} does not decode")
             }
-            BlobError::Model(e) => write!(f, "invalid robot model: {e:?}"),
+            BlobError::Model(e) => write!(f, "invalid robot model: {e}"),
             BlobError::Field {
                 location_type,
                 error,
-            } => write!(f, "workspace of location type {location_type}: {error:?}"),
+            } => write!(f, "workspace of location type {location_type}: {error}"),
             BlobError::Reference { section, index } => {
                 write!(f, "{section:?} record {index} refers to something missing")
             }
         }
     }
 }
+
+impl core::error::Error for BlobError {}
 
 /// Sections of the payload, for error reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

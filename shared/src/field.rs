@@ -95,6 +95,28 @@ pub enum FieldError {
     Certificates,
 }
 
+impl core::fmt::Display for FieldError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            FieldError::Geometry => write!(
+                f,
+                "workspace field geometry is invalid (non-finite origin, voxel not positive, or dimensions not whole bricks)"
+            ),
+            FieldError::Length => write!(f, "workspace field data has the wrong length"),
+            FieldError::BrickIndex { brick } => write!(
+                f,
+                "workspace field brick map entry {brick} points past the stored bricks"
+            ),
+            FieldError::Certificates => write!(
+                f,
+                "workspace field certificates are not sorted by cell or lie outside the grid"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for FieldError {}
+
 /// A validated field, reading its arrays in place.
 #[derive(Clone, Copy, Debug)]
 pub struct Field<'a> {

@@ -13,8 +13,6 @@
 //! - [`field`], [`risk`]: the learned workspace as a conservative distance field and the
 //!   risk of Eq. 16;
 //! - [`limits`]: speed, acceleration and jerk limits of the KMR iiwa;
-//! - [`ipc`]: the fixed-size messages between the host cell and firmware-sim (iceoryx2's
-//!   `ZeroCopySend` with the feature `host`);
 //! - [`profile`], [`linalg`]: small helpers (time scaling, fixed-size solvers).
 //!
 //! Section, equation and algorithm numbers refer to Toner, Tilbury, Barton, "PRF: A Program
@@ -25,7 +23,6 @@
 pub mod blob;
 pub mod dmp;
 pub mod field;
-pub mod ipc;
 pub mod kinematics;
 pub mod limits;
 pub mod linalg;

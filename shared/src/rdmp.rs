@@ -126,6 +126,56 @@ pub enum RdmpError {
     Finished,
 }
 
+impl core::fmt::Display for RdmpError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            RdmpError::Dmp(e) => write!(f, "{e}"),
+            RdmpError::SingularDemonstration {
+                sample,
+                manipulability,
+            } => write!(
+                f,
+                "demonstration sample {sample} is too close to a singularity (manipulability {manipulability:.2e})"
+            ),
+            RdmpError::Singular {
+                step,
+                manipulability,
+            } => write!(
+                f,
+                "the arm reached a near-singular configuration at step {step} (manipulability {manipulability:.2e})"
+            ),
+            RdmpError::JointLimit { step, joint, value } => write!(
+                f,
+                "joint A{} would leave its position limits at step {step} ({value:.4} rad)",
+                joint + 1
+            ),
+            RdmpError::NonFinite { step } => {
+                write!(f, "a value is not finite (NaN or infinite) at step {step}")
+            }
+            RdmpError::LengthMismatch => {
+                write!(
+                    f,
+                    "buffers of different lengths where equal lengths are needed"
+                )
+            }
+            RdmpError::BadConfig => write!(
+                f,
+                "RDMP settings out of range (null-space gain negative or gain × Δt ≥ 1, or NaN)"
+            ),
+            RdmpError::Finished => write!(f, "the motion already reached its last step"),
+        }
+    }
+}
+
+impl core::error::Error for RdmpError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            RdmpError::Dmp(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
 impl From<DmpError> for RdmpError {
     fn from(e: DmpError) -> Self {
         RdmpError::Dmp(e)

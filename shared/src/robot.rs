@@ -32,6 +32,30 @@ pub enum ModelError {
     Home { joint: usize },
 }
 
+impl core::fmt::Display for ModelError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ModelError::Joint { joint } => write!(
+                f,
+                "joint A{}: non-finite origin or axis, lower limit not below upper, or speed limit not positive",
+                joint + 1
+            ),
+            ModelError::Transform => write!(f, "the mount, flange or TCP transform is not finite"),
+            ModelError::Sphere { index } => write!(
+                f,
+                "collision sphere {index} names no frame of the robot or has a bad centre or radius"
+            ),
+            ModelError::Home { joint } => write!(
+                f,
+                "the home configuration is outside the limits of joint A{}",
+                joint + 1
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ModelError {}
+
 /// One revolute joint: `T_i^{i−1} = origin · Rot(axis, q_i)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Joint {

@@ -1,9 +1,8 @@
 //! What the end-to-end tests share: a scratch directory per test process and the example
 //! cell's two-demonstration blob in it.
 
-use indicatif::ProgressBar;
-use prf_offline::compile::blob_of_demonstrations;
-use prf_offline::world::World;
+use prf_sim::blob_of_demonstrations;
+use prf_sim::world::World;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -40,7 +39,8 @@ pub fn blob() -> &'static Path {
                     && (key == ("Part1", "CNC", "Printer") || key == ("Part2", "Printer", "Table"))
             })
             .collect();
-        let bytes = blob_of_demonstrations(&world, &chosen, &ProgressBar::hidden()).expect("blob");
+        let bytes =
+            blob_of_demonstrations(&world, &chosen, &prf_files::progress::quiet).expect("blob");
         let path = dir().join("cell.blob");
         std::fs::write(&path, bytes).expect("write blob");
         path

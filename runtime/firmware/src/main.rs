@@ -177,8 +177,7 @@ fn execute(
         ExecutorConfig::default(),
         &mut reversal,
     );
-    let mut cell = IdealCell::new(rt.model.home, &task.home);
-    let dt = rt.config.rdmp.dt;
+    let mut cell = IdealCell::new(rt.model.home, &task.home, rt.config.rdmp.dt);
     let period = Duration::from_hz(TICK_HZ as u64);
     let mut t = Instant::from_ticks(0);
     let (mut late, mut busy, mut misses) = (0u64, 0, 0);
@@ -192,9 +191,8 @@ fn execute(
         block_on(ticker.next());
         let woke = counts();
         late = late.max(woke.saturating_sub(due));
-        let sp = ex.tick(t, &cell.measured);
+        let Ok(sp) = ex.step(t, &mut cell);
         let used = counts() - woke;
-        cell.apply(&sp, dt);
         let record = stream::encode(&sp);
         crc = crc32_update(crc, &record);
         let work = counts().saturating_sub(due);
@@ -205,7 +203,7 @@ fn execute(
         }
         let m = &mut by_mode[sp.mode as usize];
         *m = (m.0 + 1, m.1.max(used), m.2 + used);
-        let end = matches!(sp.mode, Mode::Done | Mode::Fault);
+        let end = sp.is_final();
         if let Some(f) = file.as_mut() {
             buffer[buffered * RECORD_LEN..][..RECORD_LEN].copy_from_slice(&record);
             buffered += 1;

@@ -72,6 +72,36 @@ pub enum DmpError {
     BufferTooSmall { need: usize },
 }
 
+impl core::fmt::Display for DmpError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            DmpError::BadParams => write!(
+                f,
+                "DMP parameters out of range (number of basis functions, gains or time step)"
+            ),
+            DmpError::TooFewSamples { got, need } => write!(
+                f,
+                "the demonstration has {got} samples, a DMP needs at least {need}"
+            ),
+            DmpError::NonFinite { sample } => {
+                write!(f, "sample {sample} is not finite (NaN or infinite)")
+            }
+            DmpError::IllConditioned => write!(
+                f,
+                "the DMP weight regression is singular even after regularisation"
+            ),
+            DmpError::BufferTooSmall { need } => {
+                write!(
+                    f,
+                    "the output buffer is too short: the trajectory has {need} samples"
+                )
+            }
+        }
+    }
+}
+
+impl core::error::Error for DmpError {}
+
 /// Minimum number of samples of a demonstration.
 pub const MIN_SAMPLES: usize = 5;
 

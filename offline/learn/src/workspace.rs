@@ -1,0 +1,377 @@
+//! LearnWorkspace (Sec. 4.1): the dilated safe workspace Ω+ of a location type from the
+//! demonstrated configurations, compiled into the conservative field of
+//! [`prf_shared::field`].
+//!
+//! 1. **Balls**: every sample of every instance is re-sampled linearly so that no sphere
+//!    centre moves more than [`WorkspaceConfig::resample`] between configurations; each
+//!    robot sphere (c_j, r_j) becomes the ball B(c_j, r_j + ε) in the location frame.
+//!    Ω+ is their union.
+//! 2. **Features**: every grid node within reach of a ball gets the ball deepest at it,
+//!    argmin_k |v − c_k| − R_k over the balls thinned to [`WorkspaceConfig::feature_spacing`]
+//!    (a subset of Ω+, so every value is an upper bound of the signed distance).
+//! 3. **Far field**: nodes no ball reaches get the exact Euclidean distance transform
+//!    ([`crate::edt`]) to the nearest node inside Ω+, an upper bound of their distance.
+//! 4. **Encoding**: bricks far outside become uniform; feature balls are quantized
+//!    conservatively (offset rounded, radius shrunk by the rounding error).
+//! 5. **Certificates**: every demonstrated sphere that the encoded field does not certify
+//!    with margin [`WorkspaceConfig::certify_margin`] gets its own ball as a certificate in
+//!    the cells around it, so every demonstrated configuration has risk 0.
+
+use crate::edt;
+use nalgebra::Vector3;
+use prf_shared::JointVector;
+use prf_shared::field::{
+    BRICK, BRICK_NODES, CERT_BYTES, Field, FieldData, MM, NODE_BYTES, OFFSET_UNIT, UNIFORM,
+};
+use prf_shared::kinematics::ArmKinematics;
+use prf_shared::robot::{MAX_SPHERES, RobotModel};
+use prf_shared::se3::Pose;
+use std::collections::{BTreeMap, HashSet};
+
+/// Settings of workspace learning.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorkspaceConfig {
+    /// Dilation ε = r_d − r, m.
+    pub epsilon: f64,
+    /// Node spacing h, m.
+    pub voxel: f64,
+    /// Maximum sphere-centre travel between re-sampled configurations, m.
+    pub resample: f64,
+    /// Spacing of the balls used for node features (a subset of the re-sampled ones), m.
+    pub feature_spacing: f64,
+    /// Nodes within this distance outside a ball get its exact feature, m.
+    pub reach: f64,
+    /// Bricks whose nodes are all at least this far outside Ω+ are stored as one value, m.
+    pub far: f64,
+    /// Demonstrated spheres must be certified with this margin (sdf + r ≤ −margin), m.
+    pub certify_margin: f64,
+}
+
+impl Default for WorkspaceConfig {
+    fn default() -> Self {
+        WorkspaceConfig {
+            epsilon: 0.02,
+            voxel: 0.05,
+            resample: 0.002,
+            feature_spacing: 0.01,
+            reach: 0.08,
+            far: 0.08,
+            certify_margin: 0.001,
+        }
+    }
+}
+
+/// A robot sphere at a demonstrated configuration, in the location frame: centre and radius
+/// r_j (the ball of Ω+ around it has radius r_j + ε).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SphereSample {
+    pub centre: Vector3<f64>,
+    pub radius: f64,
+}
+
+/// The demonstrated spheres of one location type, de-duplicated.
+#[derive(Default, Clone, Debug)]
+pub struct Sweep {
+    pub spheres: Vec<SphereSample>,
+    seen: HashSet<(i32, i32, i32, u8)>,
+}
+
+impl Sweep {
+    /// Adds the spheres of a configuration path (`arm` joint samples, arm base at
+    /// `arm_base` in the location frame), re-sampled so no centre moves more than `step`.
+    pub fn add_path(&mut self, model: &RobotModel, arm_base: &Pose, arm: &[[f64; 7]], step: f64) {
+        let n = model.spheres.len();
+        let centres = |q: &JointVector| {
+            let mut c = [Vector3::zeros(); MAX_SPHERES];
+            ArmKinematics::new(model, q).sphere_centres(model, &mut c);
+            c
+        };
+        let mut prev: Option<(JointVector, [Vector3<f64>; MAX_SPHERES])> = None;
+        for q in arm {
+            let q = JointVector::from(*q);
+            let c1 = centres(&q);
+            match prev {
+                None => self.add(arm_base, &c1[..n], model),
+                Some((q0, c0)) => {
+                    let travel = (0..n).map(|j| (c1[j] - c0[j]).norm()).fold(0.0, f64::max);
+                    let parts = (travel / step).ceil().max(1.0) as usize;
+                    for s in 1..=parts {
+                        let t = s as f64 / parts as f64;
+                        let c = if s == parts {
+                            c1
+                        } else {
+                            centres(&q0.lerp(&q, t))
+                        };
+                        self.add(arm_base, &c[..n], model);
+                    }
+                }
+            }
+            prev = Some((q, c1));
+        }
+    }
+
+    fn add(&mut self, arm_base: &Pose, centres: &[Vector3<f64>], model: &RobotModel) {
+        for (j, (c, s)) in centres.iter().zip(&model.spheres).enumerate() {
+            let p = arm_base.transform_point(&(*c).into()).coords;
+            // Re-visited configurations (the reversal, repeated programs) add nothing new.
+            let key = (
+                (p.x / 2e-4).round() as i32,
+                (p.y / 2e-4).round() as i32,
+                (p.z / 2e-4).round() as i32,
+                j as u8,
+            );
+            if self.seen.insert(key) {
+                self.spheres.push(SphereSample {
+                    centre: p,
+                    radius: s.radius,
+                });
+            }
+        }
+    }
+}
+
+/// The encoded field of one workspace and figures about it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LearnedField {
+    pub origin: [f32; 3],
+    pub voxel: f32,
+    pub dims: [u16; 3],
+    pub bricks: Vec<u8>,
+    pub nodes: Vec<u8>,
+    pub certificates: Vec<u8>,
+    /// Demonstrated spheres (after de-duplication) and feature balls used.
+    pub spheres: usize,
+    pub feature_balls: usize,
+}
+
+impl LearnedField {
+    pub fn data(&self) -> FieldData<'_> {
+        FieldData {
+            origin: self.origin,
+            voxel: self.voxel,
+            dims: self.dims,
+            bricks: &self.bricks,
+            nodes: &self.nodes,
+            certificates: &self.certificates,
+        }
+    }
+
+    /// The field view (valid by construction).
+    pub fn field(&self) -> Field<'_> {
+        Field::new(&self.data()).expect("a learned field is valid")
+    }
+
+    /// Bytes of the arrays.
+    pub fn bytes(&self) -> usize {
+        self.bricks.len() + self.nodes.len() + self.certificates.len()
+    }
+}
+
+/// Builds the field of Ω+ from the demonstrated spheres (steps 2–5 of the module doc).
+pub fn build_field(sweep: &Sweep, cfg: &WorkspaceConfig) -> Option<LearnedField> {
+    if sweep.spheres.is_empty() {
+        return None;
+    }
+    // Node positions as the runtime computes them (f32 origin and spacing in the blob).
+    let h = cfg.voxel as f32 as f64;
+    let eps = cfg.epsilon;
+    // Feature balls: a thinned subset (every sphere whose centre is not within
+    // feature_spacing of an already kept ball of the same radius).
+    let mut kept: HashSet<(i64, i64, i64, i64)> = HashSet::new();
+    let mut balls: Vec<(Vector3<f64>, f64)> = Vec::new();
+    for s in &sweep.spheres {
+        let k = |v: f64| (v / cfg.feature_spacing).round() as i64;
+        let key = (
+            k(s.centre.x),
+            k(s.centre.y),
+            k(s.centre.z),
+            (s.radius * 1e4) as i64,
+        );
+        if kept.insert(key) {
+            balls.push((s.centre, s.radius + eps));
+        }
+    }
+    // Grid: the balls' box plus a margin, whole bricks.
+    let (mut lo, mut hi) = (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN));
+    for (c, r) in &balls {
+        lo = lo.inf(&(c - Vector3::repeat(*r)));
+        hi = hi.sup(&(c + Vector3::repeat(*r)));
+    }
+    let margin = cfg.far + h;
+    lo = (lo - Vector3::repeat(margin)).map(|v| v as f32 as f64);
+    hi += Vector3::repeat(margin);
+    let dims: [usize; 3] = core::array::from_fn(|a| {
+        let n = ((hi[a] - lo[a]) / h).ceil() as usize + 1;
+        n.div_ceil(BRICK) * BRICK
+    });
+    let [nx, ny, nz] = dims;
+    let idx = |i: usize, j: usize, k: usize| (i * ny + j) * nz + k;
+    let pos = |i: usize, j: usize, k: usize| lo + Vector3::new(i as f64, j as f64, k as f64) * h;
+    // Step 2: features by splatting.
+    let mut value = vec![f64::INFINITY; nx * ny * nz];
+    let mut feature = vec![u32::MAX; nx * ny * nz];
+    for (b, (c, r)) in balls.iter().enumerate() {
+        let reach = r + cfg.reach;
+        let from = |a: usize| (((c[a] - reach - lo[a]) / h).floor().max(0.0)) as usize;
+        let to = |a: usize| ((((c[a] + reach - lo[a]) / h).ceil()) as usize).min(dims[a] - 1);
+        for i in from(0)..=to(0) {
+            for j in from(1)..=to(1) {
+                for k in from(2)..=to(2) {
+                    let d = (pos(i, j, k) - c).norm() - r;
+                    let n = idx(i, j, k);
+                    if d < value[n] {
+                        value[n] = d;
+                        feature[n] = b as u32;
+                    }
+                }
+            }
+        }
+    }
+    // Step 3: far field from the EDT to the nodes inside Ω+.
+    let mut sq: Vec<f64> = value
+        .iter()
+        .map(|&v| if v <= 0.0 { 0.0 } else { edt::FAR })
+        .collect();
+    edt::transform_3d(&mut sq, dims);
+    for (v, s) in value.iter_mut().zip(&sq) {
+        if v.is_infinite() {
+            *v = if *s >= edt::FAR {
+                f64::MAX
+            } else {
+                s.sqrt() * h
+            };
+        }
+    }
+    // Step 4: encoding.
+    let bdims = dims.map(|n| n / BRICK);
+    let mut bricks = Vec::with_capacity(2 * bdims.iter().product::<usize>());
+    let mut nodes = Vec::new();
+    let mut used = HashSet::new();
+    let max_mm = (UNIFORM - 1) as f64;
+    for bi in 0..bdims[0] {
+        for bj in 0..bdims[1] {
+            for bk in 0..bdims[2] {
+                let brick_nodes = || {
+                    (0..BRICK_NODES).map(move |l| {
+                        let (i, j, k) = (l / (BRICK * BRICK), (l / BRICK) % BRICK, l % BRICK);
+                        (bi * BRICK + i, bj * BRICK + j, bk * BRICK + k)
+                    })
+                };
+                let min_value = brick_nodes()
+                    .map(|(i, j, k)| value[idx(i, j, k)])
+                    .fold(f64::INFINITY, f64::min);
+                if min_value >= cfg.far {
+                    let max_value = brick_nodes()
+                        .map(|(i, j, k)| value[idx(i, j, k)])
+                        .fold(0.0, f64::max);
+                    let mm = (max_value / MM).ceil().min(max_mm);
+                    bricks.extend_from_slice(&(UNIFORM + mm as u16).to_le_bytes());
+                    continue;
+                }
+                let index = nodes.len() / (BRICK_NODES * NODE_BYTES);
+                bricks.extend_from_slice(&(index as u16).to_le_bytes());
+                for (i, j, k) in brick_nodes() {
+                    let n = idx(i, j, k);
+                    nodes.extend_from_slice(&encode_node(
+                        &pos(i, j, k),
+                        value[n],
+                        (feature[n] != u32::MAX).then(|| balls[feature[n] as usize]),
+                    ));
+                    if feature[n] != u32::MAX {
+                        used.insert(feature[n]);
+                    }
+                }
+            }
+        }
+    }
+    let mut learned = LearnedField {
+        origin: [lo.x as f32, lo.y as f32, lo.z as f32],
+        voxel: h as f32,
+        dims: dims.map(|n| n as u16),
+        bricks,
+        nodes,
+        certificates: Vec::new(),
+        spheres: sweep.spheres.len(),
+        feature_balls: used.len(),
+    };
+    learned.certificates = certificates(&learned, sweep, cfg);
+    Some(learned)
+}
+
+/// A node: its feature ball quantized conservatively when it exists and its centre is within
+/// the offset range; otherwise the scalar bound rounded up.
+fn encode_node(v: &Vector3<f64>, value: f64, ball: Option<(Vector3<f64>, f64)>) -> [u8; 4] {
+    if let Some((c, r)) = ball {
+        let off = (c - v) / OFFSET_UNIT;
+        if off.iter().all(|o| o.abs() <= 127.0) {
+            let q = off.map(|o| o.round());
+            let err = ((q - off) * OFFSET_UNIT).norm();
+            let r_mm = ((r - err) / MM).floor();
+            if (1.0..=255.0).contains(&r_mm) {
+                return [
+                    q.x as i8 as u8,
+                    q.y as i8 as u8,
+                    q.z as i8 as u8,
+                    r_mm as u8,
+                ];
+            }
+        }
+    }
+    let mm = (value / MM).ceil().clamp(i16::MIN as f64, i16::MAX as f64) as i16;
+    let b = mm.to_le_bytes();
+    [b[0], b[1], 0, 0]
+}
+
+/// Step 5: certificate balls for the demonstrated spheres the field does not certify.
+///
+/// Within one cell the lookup is a minimum of 1-Lipschitz terms, so a sphere whose centre c
+/// satisfies (terms of cell C at c) + r ≤ −m is certified for every centre within m of c in
+/// C. Each cell the margin ball around c touches is checked; where it fails, the sphere's own
+/// ball B(c, r + ε) becomes a certificate of that cell.
+fn certificates(learned: &LearnedField, sweep: &Sweep, cfg: &WorkspaceConfig) -> Vec<u8> {
+    let field = learned.field();
+    let mut extra: BTreeMap<u32, Vec<(Vector3<f64>, f64)>> = BTreeMap::new();
+    let m = cfg.certify_margin;
+    for s in &sweep.spheres {
+        let mut cells: Vec<[usize; 3]> = (0..8)
+            .map(|b| {
+                let corner = s.centre
+                    + Vector3::new(
+                        if b & 1 == 0 { -m } else { m },
+                        if b & 2 == 0 { -m } else { m },
+                        if b & 4 == 0 { -m } else { m },
+                    );
+                field.cell_at(&corner)
+            })
+            .collect();
+        cells.sort_unstable();
+        cells.dedup();
+        // Its own ball, quantized to mm with the radius shrunk by the rounding error.
+        let q = s.centre.map(|v| (v / MM).round() * MM);
+        let r = (((s.radius + cfg.epsilon) - (q - s.centre).norm()) / MM).floor() * MM;
+        for cell in cells {
+            let key = field.cell_index(cell);
+            let mut d = field.distance_in_cell(cell, &s.centre);
+            if let Some(list) = extra.get(&key) {
+                for (c, rr) in list {
+                    d = d.min((s.centre - c).norm() - rr);
+                }
+            }
+            if d + s.radius > -m {
+                extra.entry(key).or_default().push((q, r));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for (cell, list) in extra {
+        for (c, r) in list {
+            out.extend_from_slice(&cell.to_le_bytes());
+            for v in c.iter() {
+                out.extend_from_slice(&(((v / MM).round()) as i16).to_le_bytes());
+            }
+            out.extend_from_slice(&((r / MM).round() as u16).to_le_bytes());
+        }
+    }
+    debug_assert_eq!(out.len() % CERT_BYTES, 0);
+    out
+}

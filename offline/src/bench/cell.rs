@@ -1,0 +1,267 @@
+//! `prf bench-cell`: the host cell's figures. (1) Setpoint one-way latency from this process
+//! to a peer process through iceoryx2 against a Unix-domain datagram socket with the same
+//! payload size, in the same run: 1 kHz sends, the peer asleep between messages (woken by an
+//! iceoryx2 event / by the socket) and, for iceoryx2, also a peer that polls. (2) The 1 kHz
+//! loop against firmware-sim for `--loop` seconds: wake-up lateness, deadline misses,
+//! latency. (3) Ruckig's per-update time and allocations in the output stage.
+
+use crate::bench::alloc_count::allocations;
+use crate::cli::child::{ChildGuard, spawn_firmware};
+use anyhow::{Context, Result, anyhow, bail};
+use prf_host::cell::{Cell, CellConfig, TRACKING_GAIN};
+use prf_host::ideal::execute;
+use prf_host::stats::percentiles;
+use prf_ipc::clock::now_ns;
+use prf_ipc::link;
+use prf_ipc::messages::SetpointMsg;
+use prf_ruckig::Online;
+use prf_runtime::Runtime;
+use prf_runtime::executor::{ExecutorConfig, planar};
+use prf_runtime::plan::plan;
+use prf_shared::limits::MotionLimits;
+use prf_sim::tasks::FloorTask;
+use prf_sim::world::World;
+use std::io::BufRead;
+use std::os::unix::net::UnixDatagram;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The blob (from `prf learn` or `prf demo`).
+    pub blob: PathBuf,
+    /// Messages per transport in the latency comparison (sent at 1 kHz).
+    #[arg(long, default_value_t = 5000)]
+    pub messages: u64,
+    /// Seconds of the 1 kHz loop against firmware-sim.
+    #[arg(long, default_value_t = 60.0)]
+    pub loop_seconds: f64,
+}
+
+/// The receiving side of the latency comparison (a child process of `prf bench-cell`).
+#[derive(clap::Args, Debug)]
+pub struct PeerArgs {
+    /// iceoryx2-event, iceoryx2-poll or uds.
+    pub transport: String,
+    /// Service name or socket path.
+    pub name: String,
+}
+
+const PAYLOAD: usize = std::mem::size_of::<SetpointMsg>();
+const END: u64 = u64::MAX;
+
+/// A setpoint's bytes for the socket: seq and t_ns, then the rest of the payload's size.
+fn encode(seq: u64, t_ns: u64) -> [u8; PAYLOAD] {
+    let mut b = [0u8; PAYLOAD];
+    b[..8].copy_from_slice(&seq.to_le_bytes());
+    b[8..16].copy_from_slice(&t_ns.to_le_bytes());
+    b
+}
+
+fn header(b: &[u8]) -> (u64, u64) {
+    let word = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap_or([0; 8]));
+    (word(0), word(8))
+}
+
+/// Receives until the END message, then prints "count p50 p99 p999 max" (µs) on stdout.
+pub fn peer(a: &PeerArgs) -> Result<()> {
+    let mut lat = Vec::with_capacity(1 << 20);
+    match a.transport.as_str() {
+        "uds" => {
+            let sock = UnixDatagram::bind(&a.name).with_context(|| format!("bind {}", a.name))?;
+            println!("ready");
+            let mut buf = [0u8; PAYLOAD];
+            loop {
+                let n = sock.recv(&mut buf)?;
+                let now = now_ns();
+                let (seq, t) = header(&buf[..n]);
+                if seq == END {
+                    break;
+                }
+                lat.push(now.saturating_sub(t) as f64 * 1e-3);
+            }
+        }
+        t @ ("iceoryx2-event" | "iceoryx2-poll") => {
+            let node = link::node(&format!("prf-bench-peer-{}", std::process::id()))?;
+            let ports = link::ControllerPorts::open(&node, &a.name)?;
+            println!("ready");
+            let poll = t == "iceoryx2-poll";
+            'outer: loop {
+                if !poll {
+                    ports
+                        .ready
+                        .blocking_wait(|_| {})
+                        .map_err(|e| anyhow!("wait: {e:?}"))?;
+                }
+                while let Some(s) = ports.setpoint.receive().map_err(|e| anyhow!("{e:?}"))? {
+                    let now = now_ns();
+                    if s.seq == END {
+                        break 'outer;
+                    }
+                    lat.push(now.saturating_sub(s.t_ns) as f64 * 1e-3);
+                }
+                if poll {
+                    std::hint::spin_loop();
+                }
+            }
+        }
+        other => bail!("unknown transport {other:?}"),
+    }
+    let p = percentiles(&mut lat);
+    println!("{} {} {} {} {}", lat.len(), p[0], p[1], p[2], p[3]);
+    Ok(())
+}
+
+/// One transport: start the peer, send `n` messages at 1 kHz, collect its percentiles.
+fn latency(transport: &str, n: u64) -> Result<[f64; 5]> {
+    let name = match transport {
+        "uds" => std::env::temp_dir()
+            .join(format!("prf-bench-{}.sock", std::process::id()))
+            .to_string_lossy()
+            .into_owned(),
+        _ => format!("bench-{}-{transport}", std::process::id()),
+    };
+    let _ = std::fs::remove_file(&name);
+    let mut child = ChildGuard(
+        Command::new(std::env::current_exe()?)
+            .args(["ipc-peer", transport, &name])
+            .stdout(Stdio::piped())
+            .spawn()?,
+    );
+    let mut lines = std::io::BufReader::new(child.0.stdout.take().context("peer stdout")?).lines();
+    if lines.next().transpose()?.as_deref() != Some("ready") {
+        bail!("{transport} peer did not start");
+    }
+    let node = link::node(&format!("prf-bench-{}", std::process::id()))?;
+    let send: Box<dyn Fn(u64) -> Result<()>> = if transport == "uds" {
+        let sock = UnixDatagram::unbound()?;
+        sock.connect(&name)?;
+        Box::new(move |seq| {
+            sock.send(&encode(seq, now_ns()))?;
+            Ok(())
+        })
+    } else {
+        let ports = link::CellPorts::open(&node, &name)?;
+        Box::new(move |seq| {
+            ports.send(SetpointMsg {
+                seq,
+                t_ns: now_ns(),
+                ..SetpointMsg::default()
+            })?;
+            Ok(())
+        })
+    };
+    let t0 = Instant::now();
+    for k in 1..=n {
+        let due = t0 + Duration::from_millis(k);
+        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+        send(k)?;
+    }
+    std::thread::sleep(Duration::from_millis(5));
+    send(END)?;
+    let line = lines.next().transpose()?.context("peer result")?;
+    let v: Vec<f64> = line
+        .split_whitespace()
+        .map(|x| x.parse::<f64>())
+        .collect::<Result<_, _>>()?;
+    let _ = std::fs::remove_file(&name);
+    match v[..] {
+        [c, a, b, d, e] => Ok([c, a, b, d, e]),
+        _ => bail!("peer printed {line:?}"),
+    }
+}
+
+pub fn run(a: &Args) -> Result<()> {
+    // (1) Latency.
+    println!(
+        "setpoint one-way latency, {} messages of {PAYLOAD} B at 1 kHz to a peer process (µs)",
+        a.messages
+    );
+    println!(
+        "  {:<34} {:>8} {:>8} {:>8} {:>8}",
+        "transport", "p50", "p99", "p99.9", "max"
+    );
+    let mut rows = Vec::new();
+    for (t, label) in [
+        ("uds", "Unix datagram socket, blocking recv"),
+        ("iceoryx2-event", "iceoryx2, peer woken by event"),
+        ("iceoryx2-poll", "iceoryx2, peer polling"),
+    ] {
+        let r = latency(t, a.messages)?;
+        println!(
+            "  {label:<34} {:>8.1} {:>8.1} {:>8.1} {:>8.1}",
+            r[1], r[2], r[3], r[4]
+        );
+        rows.push(r);
+    }
+    println!(
+        "  p50 ratio to the socket: iceoryx2 event {:.2}, iceoryx2 polling {:.2}",
+        rows[1][1] / rows[0][1],
+        rows[2][1] / rows[0][1]
+    );
+
+    // (3) Ruckig in the output stage, on a real program.
+    let bytes = std::fs::read(&a.blob).with_context(|| format!("reading {}", a.blob.display()))?;
+    let rt = Runtime::load(&bytes).map_err(|e| anyhow!("{}: {e}", a.blob.display()))?;
+    let world = World::example();
+    let ft = FloorTask::new(&world, "Part1", "CNC1", "CNC2")?;
+    let p = plan(&rt, &ft.task()).map_err(|e| anyhow!("{e}"))?;
+    let program = p.program.context("no program")?;
+    let ideal = execute(&rt, &program, &ft.home, ExecutorConfig::default(), 1 << 24);
+    let l = MotionLimits::kmr_iiwa(&rt.model);
+    let mut out = Online::new(
+        &rt.model.home,
+        &l.arm_speed,
+        &l.arm_acceleration,
+        &l.arm_jerk,
+    );
+    let mut times = Vec::with_capacity(ideal.setpoints.len());
+    let a0 = allocations();
+    for sp in &ideal.setpoints {
+        let t = Instant::now();
+        out.track(&sp.arm, &sp.arm_velocity, TRACKING_GAIN);
+        out.step()?;
+        times.push(t.elapsed().as_nanos() as f64 * 1e-3);
+    }
+    let allocs = (allocations() - a0) as f64 / ideal.setpoints.len() as f64;
+    let r = percentiles(&mut times);
+    println!(
+        "\nRuckig output stage (7 axes, velocity interface), {} updates of a {:.1} s program: median {:.2} µs, p99 {:.2} µs, max {:.1} µs; {allocs:.1} allocations per update (the crate's Vec wrapper)",
+        ideal.setpoints.len(),
+        ideal.setpoints.len() as f64 * 1e-3,
+        r[0],
+        r[1],
+        r[3]
+    );
+
+    // (2) The 1 kHz loop against firmware-sim.
+    let cell_name = format!("bench-{}", std::process::id());
+    let log = std::env::temp_dir().join(format!("prf-firmware-sim-{cell_name}.log"));
+    let _fw = ChildGuard(spawn_firmware(&cell_name, planar(&ft.home), &log)?);
+    let mut cell = Cell::connect(CellConfig::new(&cell_name), &rt)?;
+    println!(
+        "\n1 kHz host cell loop against firmware-sim for ≥ {:.0} s (task {} repeated):",
+        a.loop_seconds,
+        ft.label()
+    );
+    let (mut ticks, mut misses, mut total) = (0u64, 0u64, 0.0);
+    while total < a.loop_seconds {
+        let a0 = allocations();
+        let r = cell.execute(&rt, &program, &ft.home)?;
+        let per_tick = (allocations() - a0) as f64 / r.ticks.max(1) as f64;
+        println!("  {}; {per_tick:.1} allocations per tick", r.summary());
+        if let Some(f) = &r.fault {
+            bail!("the run faulted: {f}");
+        }
+        ticks += r.ticks;
+        misses += r.deadline_misses;
+        total += r.duration_s;
+    }
+    cell.shutdown()?;
+    println!(
+        "  total: {ticks} ticks in {total:.1} s, {misses} deadline misses ({:.3} %)",
+        misses as f64 / ticks as f64 * 100.0
+    );
+    Ok(())
+}

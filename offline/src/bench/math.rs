@@ -1,0 +1,302 @@
+//! `prf bench`: medians of the math core's hot paths, each with a baseline run in the same
+//! process where one exists (the paper's SVD formulation of Alg. 1/2).
+//!
+//! Each case times batches of calls with `Instant` and reports per-call figures over many
+//! batches: median, 10th and 90th percentile. Timing lives here, not in tests.
+
+use crate::synthetic;
+use anyhow::Result;
+use nalgebra::{SMatrix, Vector6};
+use prf_host::stats::percentiles;
+use prf_shared::dmp::DmpParams;
+use prf_shared::kinematics::ArmKinematics;
+use prf_shared::nullspace::{kernel, pinv_apply};
+use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpRun, integrate, null_space_coordinate};
+use prf_shared::robot::RobotModel;
+use prf_shared::{Jacobian, JointVector};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Measuring time per case, s.
+    #[arg(long, default_value_t = 1.0)]
+    seconds: f64,
+    /// Also benchmark the runtime on this blob (from `prf learn`): load, planning of every
+    /// task of the example cell, executor ticks, RAM.
+    #[arg(long)]
+    blob: Option<std::path::PathBuf>,
+}
+
+/// Per-call statistics in nanoseconds.
+struct Stats {
+    median: f64,
+    p10: f64,
+    p90: f64,
+}
+
+/// Times `batch` calls of `f` per sample for about `seconds`; returns per-call statistics.
+fn measure(seconds: f64, batch: usize, mut f: impl FnMut()) -> Stats {
+    for _ in 0..batch {
+        f(); // warm-up
+    }
+    let budget = Duration::from_secs_f64(seconds);
+    let start = Instant::now();
+    let mut per_call = Vec::new();
+    while start.elapsed() < budget || per_call.len() < 20 {
+        let t = Instant::now();
+        for _ in 0..batch {
+            f();
+        }
+        per_call.push(t.elapsed().as_nanos() as f64 / batch as f64);
+    }
+    per_call.sort_by(f64::total_cmp);
+    let at = |q: f64| per_call[((per_call.len() - 1) as f64 * q).round() as usize];
+    Stats {
+        median: at(0.5),
+        p10: at(0.1),
+        p90: at(0.9),
+    }
+}
+
+fn report(name: &str, s: &Stats, unit: &str) {
+    let (k, u) = match unit {
+        "µs" => (1e-3, "µs"),
+        "ms" => (1e-6, "ms"),
+        _ => (1.0, "ns"),
+    };
+    println!(
+        "  {name:<44} median {:>9.3} {u}   p10 {:>9.3}   p90 {:>9.3}",
+        s.median * k,
+        s.p10 * k,
+        s.p90 * k
+    );
+}
+
+/// Baseline of Alg. 1/2 lines 6–10 as written: N = I − J⁺J, M = first column of U of SVD(N).
+fn kernel_svd(j: &Jacobian) -> JointVector {
+    let pinv = j.pseudo_inverse(1e-12).unwrap_or_else(|_| SMatrix::zeros());
+    let n = SMatrix::<f64, 7, 7>::identity() - pinv * j;
+    let svd = n.svd(true, false);
+    let u = svd.u.unwrap();
+    let i = svd.singular_values.imax();
+    u.column(i).into()
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let secs = args.seconds.max(0.05);
+    let model = RobotModel::kmr_iiwa14();
+    let cfg = RdmpConfig::default();
+    let configs: Vec<JointVector> = synthetic::reach(2.0, 0.01)
+        .into_iter()
+        .map(JointVector::from)
+        .collect();
+    let jacobians: Vec<Jacobian> = configs
+        .iter()
+        .map(|q| ArmKinematics::new(&model, q).jacobian(&model))
+        .collect();
+    println!(
+        "prf bench — {} s per case, per-call figures (build: {})",
+        secs,
+        if cfg!(debug_assertions) {
+            "debug, not representative"
+        } else {
+            "release"
+        }
+    );
+
+    println!("\nkinematics");
+    let mut i = 0;
+    let fk = measure(secs, 256, || {
+        i = (i + 1) % configs.len();
+        let k = ArmKinematics::new(&model, black_box(&configs[i]));
+        black_box(k.jacobian(&model));
+    });
+    report("FK (all frames + TCP) + Jacobian", &fk, "ns");
+
+    println!("\nnull-space basis M(q) (Sec. 4.2.1)");
+    let cof = measure(secs, 256, || {
+        i = (i + 1) % jacobians.len();
+        black_box(kernel(black_box(&jacobians[i])));
+    });
+    report("QR of Jᵀ → M(q), manipulability (ours)", &cof, "ns");
+    let svd = measure(secs, 64, || {
+        i = (i + 1) % jacobians.len();
+        black_box(kernel_svd(black_box(&jacobians[i])));
+    });
+    report("baseline: N = I − J⁺J, SVD(N) (Alg. 1/2)", &svd, "ns");
+    println!(
+        "  → {:.1}× faster than the SVD baseline",
+        svd.median / cof.median
+    );
+
+    println!("\npseudo-inverse solve J⁺V");
+    let v = Vector6::new(0.1, -0.2, 0.05, 0.3, 0.0, -0.1);
+    let qr = measure(secs, 256, || {
+        i = (i + 1) % jacobians.len();
+        black_box(pinv_apply(black_box(&jacobians[i]), &v));
+    });
+    report("QR of Jᵀ → J⁺V = Q[R⁻ᵀV; 0] (ours)", &qr, "ns");
+    let svdp = measure(secs, 64, || {
+        i = (i + 1) % jacobians.len();
+        black_box(jacobians[i].pseudo_inverse(1e-12).map(|p| p * v).ok());
+    });
+    report("baseline: SVD pseudo-inverse", &svdp, "ns");
+    println!("  → {:.1}× faster", svdp.median / qr.median);
+
+    println!("\nRDMP (Alg. 2), 2 s reach, Δt = 1 ms");
+    let demo = synthetic::reach(2.0, 0.01);
+    let mut gamma = vec![0.0; demo.len()];
+    null_space_coordinate(&model, &demo, cfg.min_manipulability, &mut gamma)?;
+    let rdmp = Rdmp::train(&model, &demo, &gamma, 0.01, &DmpParams::default())?;
+    let q0 = JointVector::from(demo[0]);
+    let goal = ArmKinematics::new(&model, &JointVector::from(*demo.last().unwrap())).tcp;
+    let fresh = || RdmpRun::new(&model, &rdmp, &q0, &goal, &cfg).expect("start");
+    let mut run = fresh();
+    let step = measure(secs, 100, || {
+        if run.finished() {
+            run = fresh();
+        }
+        black_box(run.step(&model, &rdmp, &cfg).expect("step"));
+    });
+    report(
+        "one RDMP step (FK, J, one QR → M and J⁺, 3 DMPs)",
+        &step,
+        "ns",
+    );
+    let whole = measure(secs, 1, || {
+        black_box(integrate(&model, &rdmp, &q0, &goal, &cfg, |_| {}).expect("integrate"));
+    });
+    report("whole integration, 2000 steps", &whole, "µs");
+    println!(
+        "  → {:.2}% of a 1 ms tick per step; goal ≤ 1 µs per step: {}",
+        step.median / 1e4,
+        if step.median <= 1000.0 {
+            "met"
+        } else {
+            "NOT met"
+        }
+    );
+    println!(
+        "\nstatic memory: trained RDMP {} B, RdmpRun (per-tick state) {} B, RobotModel {} B",
+        std::mem::size_of::<Rdmp>(),
+        std::mem::size_of::<RdmpRun>(),
+        std::mem::size_of::<RobotModel>()
+    );
+    match &args.blob {
+        Some(path) => runtime(path, secs),
+        None => {
+            println!("\n(pass --blob cell.blob for the runtime figures)");
+            Ok(())
+        }
+    }
+}
+
+/// The runtime on a blob: load, all tasks of the example cell, executor ticks, RAM.
+fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
+    use prf_host::ideal::IdealCell;
+    use prf_runtime::Runtime;
+    use prf_runtime::executor::{Executor, ExecutorConfig, Mode};
+    use prf_runtime::plan::plan;
+    use prf_runtime::reverse::Reversal;
+    use prf_runtime::skill_plan::PttSides;
+    use prf_sim::tasks::world_tasks;
+    use prf_sim::world::World;
+
+    let bytes = std::fs::read(path)?;
+    println!(
+        "\nruntime on {} ({} KiB)",
+        path.display(),
+        bytes.len() / 1024
+    );
+    let load = measure(secs, 1, || {
+        black_box(Runtime::load(black_box(&bytes)).is_ok());
+    });
+    report(
+        "Runtime::load (validate header, CRC, every record)",
+        &load,
+        "µs",
+    );
+    let rt = Runtime::load(&bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let tasks = world_tasks(&World::example());
+    let (mut integrations, mut grid, mut steps, mut feasible) = (0u64, 0u64, 0u64, 0);
+    for ft in &tasks {
+        if let Ok(p) = plan(&rt, &ft.task()) {
+            integrations += p.skills.stats.integrations as u64;
+            grid += p.skills.stats.grid_integrations;
+            steps += p.skills.stats.steps;
+            feasible += p.skills.feasible as usize;
+        }
+    }
+    let all = measure(secs.max(2.0), 1, || {
+        for ft in &tasks {
+            black_box(plan(&rt, &ft.task()).is_ok());
+        }
+    });
+    report(
+        &format!("plan all {} tasks (one core)", tasks.len()),
+        &all,
+        "ms",
+    );
+    println!(
+        "  → {feasible}/{} feasible; {integrations} RDMP integrations ({steps} steps) against the paper's grid of {grid}: {:.0}× fewer; goal ≤ 200 ms: {}",
+        tasks.len(),
+        grid as f64 / integrations.max(1) as f64,
+        if all.median <= 200e6 {
+            "met"
+        } else {
+            "NOT met"
+        }
+    );
+    // Executor ticks on the first task's program against an ideal cell, each tick timed.
+    let ft = &tasks[2];
+    let p = plan(&rt, &ft.task()).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let program = p.program.ok_or_else(|| anyhow::anyhow!("no program"))?;
+    let mut reversal = Box::new(Reversal::new());
+    let mut ex = Executor::new(
+        &rt,
+        program,
+        &ft.home,
+        ExecutorConfig::default(),
+        &mut reversal,
+    );
+    let mut cell = IdealCell::new(rt.model.home, &ft.home, 1e-3);
+    let (mut arm, mut other) = (Vec::new(), Vec::new());
+    let mut now = embassy_time::Instant::from_ticks(0);
+    // Each drive step timed: the executor tick and the ideal cell's hand-off.
+    loop {
+        let t = Instant::now();
+        let Ok(sp) = ex.step(now, black_box(&mut cell));
+        let ns = t.elapsed().as_nanos() as f64;
+        if sp.mode == Mode::Arm {
+            arm.push(ns)
+        } else {
+            other.push(ns)
+        }
+        if sp.is_final() {
+            break;
+        }
+        now += embassy_time::Duration::from_millis(1);
+    }
+    for (name, mut v) in [
+        ("executor step, arm segments", arm),
+        ("executor step, waiting segments", other),
+    ] {
+        let [p50, p99, _, max] = percentiles(&mut v);
+        println!(
+            "  {name:<44} median {:>9.3} µs   p99 {:>9.3}   max {:>9.3}   ({} ticks)",
+            p50 * 1e-3,
+            p99 * 1e-3,
+            max * 1e-3,
+            v.len()
+        );
+    }
+    println!(
+        "\nruntime RAM: Runtime {} B, Executor {} B + reversal memory {} B, planner sides {} B (stack, while planning)",
+        std::mem::size_of::<Runtime>(),
+        std::mem::size_of::<Executor>(),
+        std::mem::size_of::<Reversal>(),
+        std::mem::size_of::<PttSides>()
+    );
+    Ok(())
+}

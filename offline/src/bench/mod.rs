@@ -1,0 +1,6 @@
+//! The benchmark subcommands: `prf bench` (the math core and the runtime, [`math`]) and
+//! `prf bench-cell` (the host cell, [`cell`]), with the allocation counter they report.
+
+pub mod alloc_count;
+pub mod cell;
+pub mod math;

@@ -1,0 +1,128 @@
+//! `prf check-dataset`: validates a dataset directory, and with `--world` re-checks every
+//! program against the ground-truth cell.
+
+use crate::cli::progress::Bar;
+use anyhow::bail;
+use prf_files::dataset::Dataset;
+use prf_shared::robot::RobotModel;
+use prf_sim::validate::{self, MotionLimits};
+use prf_sim::world::World;
+use prf_sim::world::geometry::Cell;
+use rayon::prelude::*;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Dataset directory (with manifest.json).
+    pub dir: PathBuf,
+    /// Also re-check every program against a ground-truth world: a world file, or `example`
+    /// for the built-in example cell. Clearance ≥ r_d, self clearance, joint limits, speed and
+    /// acceleration limits, densely re-sampled between the stored samples.
+    #[arg(long)]
+    pub world: Option<String>,
+    /// Re-sampling resolution of the ground-truth check: largest motion of any collision
+    /// sphere between two checked configurations, m.
+    #[arg(long, default_value_t = 0.001)]
+    pub resolution: f64,
+}
+
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let model = RobotModel::kmr_iiwa14();
+    let dataset = Dataset::read(&args.dir, &model)?;
+    let samples: usize = dataset.demonstrations.iter().map(|d| d.samples.len()).sum();
+    println!(
+        "{}: {} demonstrations, {} samples, {} parts, {} locations: format OK",
+        args.dir.display(),
+        dataset.demonstrations.len(),
+        samples,
+        dataset.parts.len(),
+        dataset.locations.len()
+    );
+    let Some(world) = &args.world else {
+        return Ok(());
+    };
+    let world = if world == "example" {
+        World::example()
+    } else {
+        World::load(&PathBuf::from(world))?
+    };
+    for d in &dataset.demonstrations {
+        for placed in [&d.task.from, &d.task.to] {
+            if world.location_index(&placed.id).is_none() {
+                bail!(
+                    "{}: location {} is not in the world {}",
+                    d.id,
+                    placed.id,
+                    world.source.display()
+                );
+            }
+        }
+    }
+    if !(args.resolution > 0.0) {
+        bail!("--resolution must be positive, got {}", args.resolution);
+    }
+    let cell = Cell::new(&world, &model);
+    let limits = MotionLimits::kmr_iiwa(&model);
+    let bar = Bar::new("checking", "demonstrations", false);
+    bar.report(prf_files::Progress::Total(
+        dataset.demonstrations.len() as u64
+    ));
+    let reports: Vec<_> = dataset
+        .demonstrations
+        .par_iter()
+        .map(|d| {
+            let r = validate::check(&cell, &limits, &d.samples, args.resolution);
+            bar.inc();
+            r
+        })
+        .collect();
+    bar.finish();
+    let c = world.clearance;
+    println!(
+        "{:<6} {:>7} {:>12} {:>10} {:>8} {:>8}  closest obstacle",
+        "demo", "T [s]", "clear. [mm]", "self [mm]", "v/vmax", "a/amax"
+    );
+    let mut failed = 0;
+    for (d, r) in dataset.demonstrations.iter().zip(&reports) {
+        let ok = r.ok(c.demonstration, c.self_collision, validate::LIMIT_TOLERANCE);
+        failed += usize::from(!ok);
+        let contact = format!("{:?}", r.world_contact);
+        println!(
+            "{:<6} {:>7.1} {:>12.1} {:>10.1} {:>8.3} {:>8.3}  {}{}",
+            d.id,
+            d.samples.last().map_or(0.0, |s| s.t),
+            r.min_world * 1e3,
+            r.min_self * 1e3,
+            r.max_speed_ratio,
+            r.max_acceleration_ratio,
+            contact,
+            if ok { "" } else { "  <-- FAILS" }
+        );
+        if !ok {
+            println!(
+                "       fastest: {} at t = {:.2} s; hardest acceleration: {} at t = {:.2} s",
+                r.max_speed_at.1,
+                r.max_speed_at.0,
+                r.max_acceleration_at.1,
+                r.max_acceleration_at.0
+            );
+        }
+        if let Some((t, j, v)) = r.limit_violation {
+            println!(
+                "       a{j} = {:.2} deg outside its limits at t = {t:.2} s",
+                v.to_degrees()
+            );
+        }
+    }
+    let configurations: usize = reports.iter().map(|r| r.configurations).sum();
+    println!(
+        "{configurations} configurations checked; r_d = {:.0} mm, self clearance = {:.0} mm",
+        c.demonstration * 1e3,
+        c.self_collision * 1e3
+    );
+    if failed > 0 {
+        bail!("{failed} demonstrations violate the ground truth");
+    }
+    println!("all programs keep r_d, self clearance, joint, speed and acceleration limits");
+    Ok(())
+}

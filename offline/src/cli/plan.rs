@@ -1,0 +1,295 @@
+//! `prf plan`: plan a task (or all tasks of the floor plan) with the no_std runtime on a blob,
+//! print the choice, and optionally export the program at 1 kHz.
+
+use crate::cli::args::{read_blob, runtime};
+use anyhow::{Context, bail};
+use prf_files::dataset::trajectory_csv;
+use prf_host::ideal::execute;
+use prf_runtime::executor::{ExecutorConfig, planar};
+use prf_runtime::plan::{Plan, PlanError, plan};
+use prf_runtime::{Runtime, RuntimeConfig};
+use prf_shared::motion::Param;
+use prf_sim::tasks::{FloorTask, world_tasks};
+use prf_sim::world::World;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The blob (from `prf learn`).
+    pub blob: PathBuf,
+    /// Part instance id, e.g. Part1.
+    #[arg(long, required_unless_present = "all")]
+    pub part: Option<String>,
+    /// Location instance the part is at, e.g. CNC1.
+    #[arg(long, required_unless_present = "all")]
+    pub from: Option<String>,
+    /// Location instance the part goes to, e.g. Table1.
+    #[arg(long, required_unless_present = "all")]
+    pub to: Option<String>,
+    /// Plan every task of the floor plan (18 in the example cell) and print a table.
+    #[arg(long, conflicts_with_all = ["part", "from", "to", "export"])]
+    pub all: bool,
+    /// Write the program at 1 kHz, executed on an ideal cell, as a dataset trajectory CSV.
+    #[arg(long)]
+    pub export: Option<PathBuf>,
+    /// Write the task as a task block (for the cell-controller firmware: flash it at the TASK
+    /// region, 0x003F0000 on mps2-an500).
+    #[arg(long, conflicts_with = "all")]
+    pub task_block: Option<PathBuf>,
+    /// Floor plan (world file) with the location poses and the platform's home; default: the
+    /// built-in example cell. Its obstacles are not read.
+    #[arg(long)]
+    pub world: Option<PathBuf>,
+    /// A task is physically feasible when J* is at most this risk, m.
+    #[arg(long, default_value_t = 0.0)]
+    pub threshold: f64,
+}
+
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let world = crate::cli::args::load_world(&a.world)?;
+    let bytes = read_blob(&a.blob)?;
+    let t0 = Instant::now();
+    let config = RuntimeConfig {
+        risk_threshold: a.threshold,
+        ..RuntimeConfig::default()
+    };
+    let rt = runtime(&bytes, &a.blob, config)?;
+    let load = t0.elapsed();
+    println!(
+        "blob {}: {} KiB, loaded in {:.0} µs; runtime state {} B",
+        a.blob.display(),
+        bytes.len() / 1024,
+        load.as_secs_f64() * 1e6,
+        std::mem::size_of::<Runtime>()
+    );
+    if a.all {
+        return plan_all(&rt, &world);
+    }
+    let (Some(part), Some(from), Some(to)) = (&a.part, &a.from, &a.to) else {
+        bail!("--part, --from and --to are required without --all");
+    };
+    let ft = FloorTask::new(&world, part, from, to)?;
+    if let Some(path) = &a.task_block {
+        let block = ft.task_block()?;
+        std::fs::write(path, &block).with_context(|| format!("writing {}", path.display()))?;
+        println!(
+            "task block: {} B written to {}",
+            block.len(),
+            path.display()
+        );
+    }
+    let t0 = Instant::now();
+    let result = plan(&rt, &ft.task());
+    let took = t0.elapsed().as_secs_f64();
+    let p = match result {
+        Ok(p) => p,
+        Err(e) => {
+            println!("task {}: {e}", ft.label());
+            return Ok(());
+        }
+    };
+    print_plan(&rt, &ft, &p, took)?;
+    if let Some(path) = &a.export {
+        let Some(program) = &p.program else {
+            bail!("no program to export: no skill integrates for this task");
+        };
+        let run = execute(
+            &rt,
+            program,
+            &ft.home,
+            ExecutorConfig::default(),
+            10_000_000,
+        );
+        if let Some(f) = run.fault {
+            bail!("the program faulted on the ideal cell: {f}");
+        }
+        std::fs::write(path, trajectory_csv(&run.samples))
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!(
+            "program: {:.2} s at 1 kHz on an ideal cell ({} samples) written to {}",
+            run.samples.len() as f64 * 1e-3,
+            run.samples.len(),
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// "stance 0 (x 1.20 m, y −0.85 m, yaw 90.0°)".
+fn stance(i: u8, pose: &prf_shared::se3::Pose) -> String {
+    let p = planar(pose);
+    format!(
+        "stance {i} (x {:.3} m, y {:.3} m, yaw {:.1}°)",
+        p[0],
+        p[1],
+        p[2].to_degrees()
+    )
+}
+
+/// "skill 12 (Pick, learned from d003 at CNC with Part1)".
+fn skill(rt: &Runtime<'_>, k: u16) -> anyhow::Result<String> {
+    let s = rt
+        .blob
+        .skill(k as usize)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let class = rt
+        .blob
+        .class(s.class as usize)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let loc = match s.location_type {
+        Some(t) => rt
+            .blob
+            .location_type(t as usize)
+            .map(|l| l.name)
+            .unwrap_or("?"),
+        None => "?",
+    };
+    let part = match s.part_type {
+        Some(t) => rt.blob.part_type(t as usize).map(|p| p.name).unwrap_or("?"),
+        None => "?",
+    };
+    let shared = if s.shared { ", via share()" } else { "" };
+    Ok(format!(
+        "skill {k} ({}, learned from {} at {loc} with {part}{shared})",
+        class.name, s.demo
+    ))
+}
+
+fn mm(x: f64) -> String {
+    if x.is_finite() {
+        format!("{:.1} mm", x * 1e3)
+    } else {
+        "∞".into()
+    }
+}
+
+fn print_plan(rt: &Runtime<'_>, ft: &FloorTask, p: &Plan, took: f64) -> anyhow::Result<()> {
+    let names = ["home".to_string(), ft.from.0.clone(), ft.to.0.clone()];
+    let actions: Vec<String> = p
+        .actions
+        .iter()
+        .map(|a| {
+            let class = rt.class_code(a.class as usize).map_or("?", |c| c.name());
+            let params = rt
+                .blob
+                .class(a.class as usize)
+                .map(|c| c.action.params)
+                .unwrap_or_default();
+            let args: Vec<&str> = a.args[..a.n_args as usize]
+                .iter()
+                .zip(&params)
+                .map(|(&b, kind)| match kind {
+                    Param::Part => ft.part.0.as_str(),
+                    Param::Location => names[b as usize].as_str(),
+                })
+                .collect();
+            format!("{class}({})", args.join(", "))
+        })
+        .collect();
+    let s = &p.skills;
+    println!("task {}", ft.label());
+    println!("  action plan: {}", actions.join(", "));
+    let class = if s.feasible {
+        "physically feasible"
+    } else {
+        "symbolically feasible, physically infeasible"
+    };
+    println!(
+        "  {class}: J* = {} (r_pick {}, r_place {}; threshold {})",
+        mm(s.j),
+        mm(s.r_pick),
+        mm(s.r_place),
+        mm(rt.config.risk_threshold)
+    );
+    if let (Some(c), Some((p1, p2))) = (s.choice, p.stances) {
+        println!("  at {}: {}", ft.from.0, stance(c.stance_from, &p1));
+        println!("  at {}: {}", ft.to.0, stance(c.stance_to, &p2));
+        println!("  grasp {} of {}", c.grasp, ft.part.1);
+        println!("  pick:  {}", skill(rt, c.pick_skill)?);
+        println!("  place: {}", skill(rt, c.place_skill)?);
+    }
+    let st = &s.stats;
+    println!(
+        "  work: {} RDMP integrations ({} pruned, {} failed), {} steps, {:.1} ms; the paper's grid: {} integrations ({:.0}× more)",
+        st.integrations,
+        st.pruned,
+        st.failed,
+        st.steps,
+        took * 1e3,
+        st.grid_integrations,
+        st.grid_integrations as f64 / st.integrations.max(1) as f64
+    );
+    if let Some(program) = &p.program {
+        println!(
+            "  program: {} segments, {:.2} s of arm motion",
+            program.segments.len(),
+            program.arm_ticks() as f64 * rt.config.rdmp.dt
+        );
+    }
+    Ok(())
+}
+
+fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
+    let tasks = world_tasks(world);
+    println!(
+        "{:>2}  {:<24} {:<10} {:>9}  {:>7} {:>7} {:>5}  {:>5} {:>5}  {:>6} {:>9}  {:>8}",
+        "#",
+        "task",
+        "class",
+        "J*",
+        "stance1",
+        "stance2",
+        "grasp",
+        "pick",
+        "place",
+        "integr",
+        "grid",
+        "ms"
+    );
+    let (mut total_ms, mut integrations, mut grid, mut feasible) = (0.0, 0u64, 0u64, 0);
+    for (i, ft) in tasks.iter().enumerate() {
+        let t0 = Instant::now();
+        let result = plan(rt, &ft.task());
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        total_ms += ms;
+        match result {
+            Ok(p) => {
+                let s = &p.skills;
+                integrations += s.stats.integrations as u64;
+                grid += s.stats.grid_integrations;
+                feasible += s.feasible as usize;
+                let c = s.choice;
+                let f = |v: Option<String>| v.unwrap_or_else(|| "-".into());
+                println!(
+                    "{:>2}  {:<24} {:<10} {:>9}  {:>7} {:>7} {:>5}  {:>5} {:>5}  {:>6} {:>9}  {:>8.1}",
+                    i,
+                    ft.label(),
+                    if s.feasible { "feasible" } else { "risky" },
+                    mm(s.j),
+                    f(c.map(|c| c.stance_from.to_string())),
+                    f(c.map(|c| c.stance_to.to_string())),
+                    f(c.map(|c| c.grasp.to_string())),
+                    f(c.map(|c| c.pick_skill.to_string())),
+                    f(c.map(|c| c.place_skill.to_string())),
+                    s.stats.integrations,
+                    s.stats.grid_integrations,
+                    ms
+                );
+            }
+            Err(e @ PlanError::Infeasible(_)) => {
+                println!("{:>2}  {:<24} {e}", i, ft.label());
+            }
+            Err(e) => println!("{:>2}  {:<24} error: {e}", i, ft.label()),
+        }
+    }
+    println!(
+        "{feasible}/{} physically feasible; planning {:.1} ms in total; {} RDMP integrations against the paper's grid of {} ({:.0}× fewer)",
+        tasks.len(),
+        total_ms,
+        integrations,
+        grid,
+        grid as f64 / integrations.max(1) as f64
+    );
+    Ok(())
+}

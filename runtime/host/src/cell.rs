@@ -1,0 +1,394 @@
+//! The host cell: the no_std runtime's executor in a 1 kHz loop paced by embassy-time, each
+//! setpoint passed through a Ruckig output stage (the iiwa's speed, acceleration and jerk
+//! limits) and sent over iceoryx2 shared memory to the joint controller (`firmware-sim`),
+//! whose joint state comes back as the executor's measured state.
+//!
+//! Per tick: wake (Ticker) → receive the newest joint state → executor step (tick, then the
+//! Ruckig output stage as the plant) → send the setpoint and wake the controller. A controller that goes silent for `silent_cycles` ticks, or reports that its
+//! watchdog or its limit check stopped the arm, stops the cell with a fault. Deadline misses
+//! (a setpoint published after its 1 ms period ended) are counted, never hidden.
+
+use crate::{pacing, stats};
+use embassy_time::{Duration, Instant, Ticker};
+use prf_ipc::clock::now_ns;
+use prf_ipc::link::{self, CellPorts, Ipc, IpcError};
+use prf_ipc::messages::{JointStateMsg, SetpointMsg, flags, status};
+use prf_ruckig::{Online, RuckigError};
+use prf_runtime::Runtime;
+use prf_runtime::executor::{Executor, ExecutorConfig, Measured, Mode, Plant, Setpoint};
+use prf_runtime::program::Program;
+use prf_runtime::reverse::Reversal;
+use prf_shared::limits::MotionLimits;
+use prf_shared::se3::Pose;
+use serde::Serialize;
+
+/// Why the host cell could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum CellError {
+    #[error(transparent)]
+    Ipc(#[from] IpcError),
+    #[error("the output stage failed: {0}")]
+    Ruckig(#[from] RuckigError),
+    #[error(
+        "no joint state on prf/{cell}/joint-state within {seconds:.1} s: is `prf firmware-sim --cell {cell}` running?"
+    )]
+    NoController { cell: String, seconds: f64 },
+}
+
+/// Position gain of the Ruckig output stage, 1/s (see [`Online::track`]).
+pub const TRACKING_GAIN: f64 = 20.0;
+
+/// Settings of the host cell.
+#[derive(Clone, Debug)]
+pub struct CellConfig {
+    /// Cell name: the services are `prf/<cell>/…`.
+    pub cell: String,
+    pub executor: ExecutorConfig,
+    /// Milliseconds without a new joint state after which the cell asks iceoryx2 whether the
+    /// controller's process is alive, and stops with a fault if it is not.
+    pub dead_after_ms: f64,
+    /// Milliseconds without a new joint state after which the cell stops with a fault even
+    /// though the controller's process is alive.
+    pub silent_after_ms: f64,
+    /// How long to wait for the controller's first joint state.
+    pub connect_timeout: std::time::Duration,
+    /// Stop (brake, end the session) after this long, if set.
+    pub stop_after: Option<std::time::Duration>,
+}
+
+impl CellConfig {
+    pub fn new(cell: &str) -> Self {
+        CellConfig {
+            cell: cell.to_string(),
+            executor: ExecutorConfig::default(),
+            dead_after_ms: 3.0,
+            silent_after_ms: 100.0,
+            connect_timeout: std::time::Duration::from_secs(5),
+            stop_after: None,
+        }
+    }
+}
+
+/// What one execution did.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct CellReport {
+    pub ticks: u64,
+    pub duration_s: f64,
+    /// Every segment of the program completed.
+    pub completed: bool,
+    /// Stopped on request (`stop_after`) before completion, without a fault.
+    pub stopped: bool,
+    /// Why the cell stopped early, if it did.
+    pub fault: Option<String>,
+    /// When the fault was detected, CLOCK_MONOTONIC ns.
+    pub fault_t_ns: Option<u64>,
+    /// Largest |reference − measured| of any joint the controller reported, rad.
+    pub max_tracking_error: f64,
+    /// Setpoints the controller saw lost, repeated or refused.
+    pub lost: u32,
+    pub repeated: u32,
+    pub rejected: u32,
+    /// Setpoints published after the end of their 1 ms period.
+    pub deadline_misses: u64,
+    /// Wake-up lateness after the scheduled tick, µs: p50, p99, p99.9, max.
+    pub wake_late_us: [f64; 4],
+    /// Setpoint one-way latency cell → controller, µs: p50, p99, p99.9, max.
+    pub latency_us: [f64; 4],
+}
+
+impl CellReport {
+    /// One line: "11.2 s, max tracking error 1.30 mrad, lost 0, …, setpoint latency p50 …".
+    pub fn summary(&self) -> String {
+        format!(
+            "{:.1} s, max tracking error {:.2} mrad, lost {}, repeated {}, refused {}, deadline misses {}, wake-up late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, setpoint latency p50 {:.1} µs p99 {:.1} µs max {:.0} µs",
+            self.duration_s,
+            self.max_tracking_error * 1e3,
+            self.lost,
+            self.repeated,
+            self.rejected,
+            self.deadline_misses,
+            self.wake_late_us[0],
+            self.wake_late_us[1],
+            self.wake_late_us[3],
+            self.latency_us[0],
+            self.latency_us[1],
+            self.latency_us[3]
+        )
+    }
+}
+
+/// The host cell's connection to its controller, kept across tasks.
+pub struct Cell {
+    _node: iceoryx2::node::Node<Ipc>,
+    ports: CellPorts,
+    pub cfg: CellConfig,
+    limits: MotionLimits,
+    last: JointStateMsg,
+}
+
+/// The plant of the host cell's executor: the Ruckig output stage in front of the controller,
+/// measured through the newest joint state.
+struct OutputStage {
+    ruckig: Online,
+    measured: Measured,
+    /// Brake instead of tracking (a fault, or a stop on request).
+    stopping: bool,
+    /// The output is at rest on its target (set by the last command).
+    settled: bool,
+}
+
+impl Plant for OutputStage {
+    type Error = RuckigError;
+
+    fn measured(&self) -> Measured {
+        self.measured
+    }
+
+    /// Tracks the setpoint within the speed, acceleration and jerk limits, or brakes.
+    fn command(&mut self, sp: &Setpoint) -> Result<(), RuckigError> {
+        if sp.mode == Mode::Fault || self.stopping {
+            self.ruckig.brake();
+        } else {
+            self.ruckig.track(&sp.arm, &sp.arm_velocity, TRACKING_GAIN);
+        }
+        self.settled = self.ruckig.step()?;
+        Ok(())
+    }
+}
+
+/// Timing samples of one execution, allocated and touched before the loop (no page faults
+/// inside it): at most 10 minutes at 1 kHz.
+struct Timing {
+    late: Vec<f64>,
+    latency: Vec<f64>,
+    n_late: usize,
+    n_latency: usize,
+}
+
+impl Timing {
+    const CAP: usize = 600_000;
+
+    fn new() -> Self {
+        Timing {
+            late: vec![0.0; Self::CAP],
+            latency: vec![0.0; Self::CAP],
+            n_late: 0,
+            n_latency: 0,
+        }
+    }
+
+    fn push(v: &mut [f64], n: &mut usize, x: f64) {
+        if let Some(slot) = v.get_mut(*n) {
+            *slot = x;
+            *n += 1;
+        }
+    }
+
+    fn late(&mut self, us: f64) {
+        Self::push(&mut self.late, &mut self.n_late, us);
+    }
+
+    fn latency(&mut self, us: f64) {
+        Self::push(&mut self.latency, &mut self.n_latency, us);
+    }
+
+    fn into_report(mut self, report: &mut CellReport) {
+        report.wake_late_us = stats::percentiles(&mut self.late[..self.n_late]);
+        report.latency_us = stats::percentiles(&mut self.latency[..self.n_latency]);
+    }
+}
+
+impl Cell {
+    /// Opens the services and waits for the controller's first joint state.
+    pub fn connect(cfg: CellConfig, rt: &Runtime<'_>) -> Result<Self, CellError> {
+        let node = link::node(&format!("prf-cell-{}", std::process::id()))?;
+        let ports = CellPorts::open(&node, &cfg.cell)?;
+        let t0 = std::time::Instant::now();
+        let last = loop {
+            if let Some(js) = ports.newest()? {
+                break js;
+            }
+            if t0.elapsed() > cfg.connect_timeout {
+                return Err(CellError::NoController {
+                    cell: cfg.cell.clone(),
+                    seconds: cfg.connect_timeout.as_secs_f64(),
+                });
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        };
+        Ok(Cell {
+            _node: node,
+            ports,
+            cfg,
+            limits: MotionLimits::kmr_iiwa(&rt.model),
+            last,
+        })
+    }
+
+    /// Tells the controller to exit.
+    pub fn shutdown(&self) -> Result<(), CellError> {
+        self.ports.send(SetpointMsg {
+            t_ns: now_ns(),
+            flags: flags::SHUTDOWN,
+            ..SetpointMsg::default()
+        })?;
+        Ok(())
+    }
+
+    /// Runs `program` from the platform at `home` in real time until it completes or faults:
+    /// per tick receive → executor step through the output stage → send.
+    pub fn execute(
+        &mut self,
+        rt: &Runtime<'_>,
+        program: &Program,
+        home: &Pose,
+    ) -> Result<CellReport, CellError> {
+        let mut reversal = Box::new(Reversal::new());
+        let mut ex = Executor::new(rt, program.clone(), home, self.cfg.executor, &mut reversal);
+        let l = &self.limits;
+        let mut stage = OutputStage {
+            ruckig: Online::new(&self.last.q, &l.arm_speed, &l.arm_acceleration, &l.arm_jerk),
+            measured: measured(&self.last),
+            stopping: false,
+            settled: false,
+        };
+        let period = Duration::from_hz(1000);
+        let mut timing = Timing::new();
+        let mut report = CellReport::default();
+        let parker = pacing::Parker::new();
+        let mut last_rx = std::time::Instant::now();
+        let mut seen_sp = 0u64;
+        let stop_ticks = self.cfg.stop_after.map(|d| d.as_millis() as u64);
+        let mut ticker = Ticker::every(period);
+        let t0 = Instant::now();
+        let mut k = 0u64;
+        loop {
+            parker.block_on(ticker.next());
+            k += 1;
+            let scheduled = t0 + period * k as u32;
+            let woke = Instant::now();
+            timing.late(woke.saturating_duration_since(scheduled).as_micros() as f64);
+            if self.receive()? {
+                last_rx = std::time::Instant::now();
+            }
+            let js = self.last;
+            if js.setpoint_seq > seen_sp && js.setpoint_seq <= k {
+                seen_sp = js.setpoint_seq;
+                timing.latency(js.setpoint_latency_ns as f64 * 1e-3);
+                report.max_tracking_error = report.max_tracking_error.max(js.tracking_error);
+                (report.lost, report.repeated, report.rejected) =
+                    (js.lost, js.repeated, js.rejected);
+            }
+            // Silence in wall time, not ticks: after a late wake-up the ticker catches up with
+            // ticks in quick succession, faster than the controller answers.
+            if let Some(why) = self.controller_stop(last_rx.elapsed().as_secs_f64() * 1e3)? {
+                // No controller to brake with: nothing more is sent.
+                report.fault = Some(why);
+                report.fault_t_ns = Some(now_ns());
+                break;
+            }
+            stage.measured = measured(&js);
+            stage.stopping = stop_ticks.is_some_and(|n| k >= n);
+            let sp = ex.step(woke, &mut stage)?;
+            if sp.mode == Mode::Fault || stage.stopping {
+                if let (None, Some(f)) = (&report.fault, ex.fault()) {
+                    report.fault = Some(format!("executor: {f}"));
+                    report.fault_t_ns = Some(now_ns());
+                }
+                report.stopped = stage.stopping;
+            }
+            let finished = (ex.done() || report.fault.is_some() || stage.stopping) && stage.settled;
+            self.send(k, &sp, &stage.ruckig, report.fault.is_some(), finished)?;
+            if Instant::now() > scheduled + period {
+                report.deadline_misses += 1;
+            }
+            if finished {
+                report.completed = ex.done();
+                break;
+            }
+        }
+        report.ticks = k;
+        report.duration_s = k as f64 * 1e-3;
+        timing.into_report(&mut report);
+        Ok(report)
+    }
+
+    /// Takes the newest joint state, if one came since the last tick.
+    fn receive(&mut self) -> Result<bool, CellError> {
+        let newest = self.ports.newest()?;
+        if let Some(js) = newest {
+            self.last = js;
+        }
+        Ok(newest.is_some())
+    }
+
+    /// Why the controller can no longer be commanded, after `silent` ms without a joint state:
+    /// it is dead or silent, or it stopped the arm itself (watchdog, refused setpoint).
+    fn controller_stop(&self, silent: f64) -> Result<Option<String>, CellError> {
+        let js = &self.last;
+        let dead = silent >= self.cfg.dead_after_ms
+            && (silent >= self.cfg.silent_after_ms || !link::controller_alive(&self.cfg.cell)?);
+        Ok(if dead {
+            Some(format!(
+                "firmware-sim {}: no joint state for {silent:.1} ms (last seq {})",
+                if silent >= self.cfg.silent_after_ms {
+                    "silent"
+                } else {
+                    "dead"
+                },
+                js.seq
+            ))
+        } else if js.status & (status::WATCHDOG | status::REJECTED) != 0 && js.setpoint_seq > 0 {
+            Some(format!(
+                "firmware-sim stopped the arm: {}",
+                if js.status & status::WATCHDOG != 0 {
+                    "watchdog"
+                } else {
+                    "setpoint refused"
+                }
+            ))
+        } else {
+            None
+        })
+    }
+
+    /// Publishes tick `k`'s output-stage state with the executor's mode and gripper command.
+    fn send(
+        &self,
+        k: u64,
+        sp: &Setpoint,
+        out: &Online,
+        fault: bool,
+        last: bool,
+    ) -> Result<(), CellError> {
+        let mut f = if k == 1 { flags::FIRST } else { 0 };
+        if sp.close_gripper {
+            f |= flags::GRIPPER_CLOSE;
+        }
+        if fault {
+            f |= flags::FAULT;
+        }
+        if last {
+            f |= flags::LAST;
+        }
+        self.ports.send(SetpointMsg {
+            seq: k,
+            t_ns: now_ns(),
+            q: core::array::from_fn(|j| out.position()[j]),
+            qd: core::array::from_fn(|j| out.velocity()[j]),
+            base_goal: sp.base_goal,
+            mode: sp.mode as u32,
+            flags: f,
+        })?;
+        Ok(())
+    }
+}
+
+/// The executor's measured state from a joint state message.
+fn measured(js: &JointStateMsg) -> Measured {
+    Measured {
+        arm: js.q,
+        base: js.base,
+        gripper: js.gripper,
+    }
+}

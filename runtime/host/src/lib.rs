@@ -1,0 +1,14 @@
+//! `prf-host`: the no_std runtime on a PC.
+//!
+//! - [`cell`]: the host cell, the executor in a 1 kHz loop streaming setpoints through a
+//!   Ruckig output stage over iceoryx2 to the joint controller (receive → tick → output stage →
+//!   send);
+//! - [`pacing`]: embassy-time's `Ticker` without an async executor;
+//! - [`ideal`]: a program run tick by tick on the runtime's ideal cell (`prf plan --export`,
+//!   tests);
+//! - [`stats`]: percentiles of timing samples.
+
+pub mod cell;
+pub mod ideal;
+pub mod pacing;
+pub mod stats;

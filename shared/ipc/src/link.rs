@@ -1,0 +1,241 @@
+//! The iceoryx2 services of one cell, the one place both processes (and test observers) open
+//! them, so they agree on names and sizes:
+//! - `prf/<cell>/setpoint`: [`SetpointMsg`], cell → controller;
+//! - `prf/<cell>/setpoint-ready`: event, cell → controller, wakes the controller;
+//! - `prf/<cell>/joint-state`: [`JointStateMsg`], controller → cell.
+//!
+//! `<cell>` keeps concurrent cells apart (tests use unique names; `prf demo` uses its pid).
+
+use crate::messages::{JointStateMsg, SetpointMsg};
+use iceoryx2::node::Node;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+
+/// An iceoryx2 operation on a cell's services that failed: what was tried, and iceoryx2's
+/// answer.
+#[derive(Debug, thiserror::Error)]
+#[error("iceoryx2: {what}: {detail}")]
+pub struct IpcError {
+    pub what: String,
+    pub detail: String,
+}
+
+impl IpcError {
+    fn new(what: impl Into<String>, detail: impl core::fmt::Debug) -> Self {
+        IpcError {
+            what: what.into(),
+            detail: format!("{detail:?}"),
+        }
+    }
+}
+
+/// The result of an IPC operation.
+pub type Result<T> = core::result::Result<T, IpcError>;
+
+/// Inter-process service of iceoryx2 (POSIX shared memory).
+pub type Ipc = ipc::Service;
+
+/// Subscriber queue depth: up to 1 s of 1 kHz messages for an observer that polls slowly.
+pub const QUEUE: usize = 1024;
+/// Subscribers per service: the peer, plus observers (tests, tools).
+const MAX_SUBSCRIBERS: usize = 8;
+
+/// A node with iceoryx2's own log at Error (its missing-config notice is not ours to show).
+/// Resources left by processes that died (killed mid-task) are removed first, so a restart
+/// after a crash works.
+pub fn node(name: &str) -> Result<Node<Ipc>> {
+    set_log_level(LogLevel::Error);
+    let node = NodeBuilder::new()
+        .name(&NodeName::new(name).map_err(|e| IpcError::new(format!("node name {name:?}"), e))?)
+        .create::<Ipc>()
+        .map_err(|e| IpcError::new(format!("iceoryx2 node {name:?}"), e))?;
+    node.try_cleanup_dead_nodes();
+    Ok(node)
+}
+
+/// The controller's node name for `cell` (how a cell tells whether its controller is alive).
+pub fn controller_node_name(cell: &str) -> String {
+    format!("prf-firmware-sim/{cell}")
+}
+
+/// Whether a controller node of `cell` is alive. A process that died (even by SIGKILL) is
+/// seen as dead at once: iceoryx2 tracks node liveness with a lock the kernel releases.
+pub fn controller_alive(cell: &str) -> Result<bool> {
+    use iceoryx2::node::NodeView;
+    let want = controller_node_name(cell);
+    let mut alive = false;
+    Node::<Ipc>::list(Config::global_config(), |state| {
+        if let NodeState::Alive(view) = &state
+            && view
+                .details()
+                .as_ref()
+                .is_some_and(|d| d.name().as_str() == want)
+        {
+            alive = true;
+            return CallbackProgression::Stop;
+        }
+        CallbackProgression::Continue
+    })
+    .map_err(|e| IpcError::new("listing iceoryx2 nodes", e))?;
+    Ok(alive)
+}
+
+fn service_name(cell: &str, what: &str) -> Result<ServiceName> {
+    let s = format!("prf/{cell}/{what}");
+    ServiceName::new(&s).map_err(|e| IpcError::new(format!("service name {s:?}"), e))
+}
+
+fn topic<T: core::fmt::Debug + ZeroCopySend + 'static>(
+    node: &Node<Ipc>,
+    cell: &str,
+    what: &str,
+) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<Ipc, T, ()>> {
+    let name = service_name(cell, what)?;
+    node.service_builder(&name)
+        .publish_subscribe::<T>()
+        .max_publishers(1)
+        .max_subscribers(MAX_SUBSCRIBERS)
+        .subscriber_max_buffer_size(QUEUE)
+        .history_size(0)
+        .open_or_create()
+        .map_err(|e| IpcError::new(format!("service {name}"), e))
+}
+
+fn subscriber<T: core::fmt::Debug + ZeroCopySend + 'static>(
+    node: &Node<Ipc>,
+    cell: &str,
+    what: &str,
+) -> Result<Subscriber<Ipc, T, ()>> {
+    topic::<T>(node, cell, what)?
+        .subscriber_builder()
+        .buffer_size(QUEUE)
+        .create()
+        .map_err(|e| IpcError::new(format!("subscriber of prf/{cell}/{what}"), e))
+}
+
+fn publisher<T: core::fmt::Debug + ZeroCopySend + 'static>(
+    node: &Node<Ipc>,
+    cell: &str,
+    what: &str,
+) -> Result<Publisher<Ipc, T, ()>> {
+    topic::<T>(node, cell, what)?
+        .publisher_builder()
+        .create()
+        .map_err(|e| IpcError::new(format!("publisher of prf/{cell}/{what}"), e))
+}
+
+fn event(
+    node: &Node<Ipc>,
+    cell: &str,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<Ipc>> {
+    let name = service_name(cell, "setpoint-ready")?;
+    node.service_builder(&name)
+        .event()
+        .open_or_create()
+        .map_err(|e| IpcError::new(format!("service {name}"), e))
+}
+
+/// Sends one message (loan a sample in shared memory, write it, publish it).
+fn send<T: core::fmt::Debug + ZeroCopySend>(p: &Publisher<Ipc, T, ()>, msg: T) -> Result<()> {
+    let sample = p.loan_uninit().map_err(|e| IpcError::new("loan", e))?;
+    sample
+        .write_payload(msg)
+        .send()
+        .map_err(|e| IpcError::new("send", e))?;
+    Ok(())
+}
+
+/// Hands every message received since the last call to `f`, oldest first.
+fn drain<T: core::fmt::Debug + ZeroCopySend + Copy>(
+    s: &Subscriber<Ipc, T, ()>,
+    mut f: impl FnMut(T),
+) -> Result<()> {
+    while let Some(sample) = s.receive().map_err(|e| IpcError::new("receive", e))? {
+        f(*sample);
+    }
+    Ok(())
+}
+
+/// The cell's ports: publishes setpoints and wakes the controller, reads joint states.
+pub struct CellPorts {
+    pub setpoint: Publisher<Ipc, SetpointMsg, ()>,
+    pub ready: Notifier<Ipc>,
+    pub joint_state: Subscriber<Ipc, JointStateMsg, ()>,
+}
+
+impl CellPorts {
+    pub fn open(node: &Node<Ipc>, cell: &str) -> Result<Self> {
+        Ok(CellPorts {
+            setpoint: publisher(node, cell, "setpoint")?,
+            ready: event(node, cell)?
+                .notifier_builder()
+                .create()
+                .map_err(|e| IpcError::new(format!("notifier of prf/{cell}/setpoint-ready"), e))?,
+            joint_state: subscriber(node, cell, "joint-state")?,
+        })
+    }
+
+    /// Sends one setpoint and wakes the controller.
+    pub fn send(&self, msg: SetpointMsg) -> Result<()> {
+        send(&self.setpoint, msg)?;
+        self.ready
+            .notify()
+            .map_err(|e| IpcError::new("notify", e))?;
+        Ok(())
+    }
+
+    /// The newest joint state received since the last call, if any.
+    pub fn newest(&self) -> Result<Option<JointStateMsg>> {
+        let mut newest = None;
+        drain(&self.joint_state, |m| newest = Some(m))?;
+        Ok(newest)
+    }
+}
+
+/// The controller's ports: reads setpoints (woken by the event), publishes joint states.
+pub struct ControllerPorts {
+    pub setpoint: Subscriber<Ipc, SetpointMsg, ()>,
+    pub ready: Listener<Ipc>,
+    pub joint_state: Publisher<Ipc, JointStateMsg, ()>,
+}
+
+impl ControllerPorts {
+    pub fn open(node: &Node<Ipc>, cell: &str) -> Result<Self> {
+        Ok(ControllerPorts {
+            setpoint: subscriber(node, cell, "setpoint")?,
+            ready: event(node, cell)?
+                .listener_builder()
+                .create()
+                .map_err(|e| IpcError::new(format!("listener of prf/{cell}/setpoint-ready"), e))?,
+            joint_state: publisher(node, cell, "joint-state")?,
+        })
+    }
+
+    pub fn publish(&self, msg: JointStateMsg) -> Result<()> {
+        send(&self.joint_state, msg)
+    }
+}
+
+/// A passive observer of both topics (tests, tools): it sees every message, it sends none.
+pub struct Observer {
+    pub setpoint: Subscriber<Ipc, SetpointMsg, ()>,
+    pub joint_state: Subscriber<Ipc, JointStateMsg, ()>,
+}
+
+impl Observer {
+    pub fn open(node: &Node<Ipc>, cell: &str) -> Result<Self> {
+        Ok(Observer {
+            setpoint: subscriber(node, cell, "setpoint")?,
+            joint_state: subscriber(node, cell, "joint-state")?,
+        })
+    }
+
+    /// Moves every message received since the last call into the two lists.
+    pub fn drain(&self, sp: &mut Vec<SetpointMsg>, js: &mut Vec<JointStateMsg>) -> Result<()> {
+        drain(&self.setpoint, |m| sp.push(m))?;
+        drain(&self.joint_state, |m| js.push(m))
+    }
+}
