@@ -71,7 +71,7 @@ fn parse_pose(s: &str) -> Result<[f64; 3], String> {
 }
 
 /// Runs the controller and prints its summary.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub fn run(args: &Args) -> Result<(), controller::ControllerError> {
     let cfg = args.config();
     eprintln!(
         "prf firmware-sim: cell {:?}, log {}",

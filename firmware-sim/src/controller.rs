@@ -6,13 +6,12 @@
 
 use crate::guard::{Admission, Guard};
 use crate::servo::{ArmServo, ServoConfig};
-use anyhow::{Context, Result};
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
 use prf_ipc::clock::now_ns;
-use prf_ipc::link::{self, ControllerPorts};
+use prf_ipc::link::{self, ControllerPorts, IpcError};
 use prf_ipc::messages::{JointStateMsg, SetpointMsg, flags, status};
-use prf_ruckig::{DT, Online};
+use prf_ruckig::{DT, Online, RuckigError};
 use prf_shared::NA;
 use prf_shared::limits::MotionLimits;
 use prf_shared::robot::RobotModel;
@@ -20,6 +19,28 @@ use prf_shared::se3::wrap;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
+
+/// Why the controller stopped with an error.
+#[derive(Debug, thiserror::Error)]
+pub enum ControllerError {
+    #[error(transparent)]
+    Ipc(#[from] IpcError),
+    #[error("braking or driving the platform: {0}")]
+    Ruckig(#[from] RuckigError),
+    #[error("iceoryx2 wait set: {0}")]
+    WaitSet(String),
+    #[error("creating the log {path}")]
+    CreateLog {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("writing the log")]
+    Log(#[from] std::io::Error),
+}
+
+/// The result of a controller operation.
+pub type Result<T> = std::result::Result<T, ControllerError>;
 
 /// Everything the controller is started with.
 #[derive(Clone, Debug)]
@@ -183,171 +204,294 @@ pub struct Summary {
     pub max_tracking_error: f64,
 }
 
+/// What a setpoint did.
+enum Flow {
+    /// The plant stepped and the state was published.
+    Stepped,
+    /// A repeated setpoint, ignored.
+    Skipped,
+    /// SHUTDOWN: the controller exits.
+    Exit,
+}
+
+/// The controller's state between cycles: the plant, the admission guard, the session and the
+/// log. One cycle is [`Controller::on_setpoint`] (a setpoint came) or
+/// [`Controller::on_silence`] (a period passed without one); each ends in
+/// [`Controller::publish`].
+struct Controller<'c> {
+    cfg: &'c Config,
+    model: RobotModel,
+    limits: MotionLimits,
+    ports: &'c ControllerPorts,
+    log: std::io::BufWriter<std::fs::File>,
+    start: Instant,
+    plant: Plant,
+    guard: Guard,
+    summary: Summary,
+    active: bool,
+    /// Watchdog or refusal: latched (setpoints ignored, arm braked) until the next FIRST.
+    halted: bool,
+    state_bits: u32,
+    last_setpoint: Instant,
+    js_seq: u64,
+    window_error: f64,
+    window_latency: u64,
+    last_sp_seq: u64,
+    last_latency: u64,
+}
+
+impl<'c> Controller<'c> {
+    fn new(cfg: &'c Config, ports: &'c ControllerPorts) -> Result<Self> {
+        let model = RobotModel::kmr_iiwa14();
+        let limits = MotionLimits::kmr_iiwa(&model);
+        let log_file =
+            std::fs::File::create(&cfg.log).map_err(|source| ControllerError::CreateLog {
+                path: cfg.log.display().to_string(),
+                source,
+            })?;
+        let mut log = std::io::BufWriter::with_capacity(1 << 16, log_file);
+        writeln!(
+            log,
+            "# prf firmware-sim, cell {:?}, servo {:.1} Hz ζ {:.2}, watchdog {} cycles, gripper {:.2} s",
+            cfg.cell,
+            cfg.servo.bandwidth_hz,
+            cfg.servo.damping,
+            cfg.watchdog_cycles,
+            cfg.gripper_time
+        )?;
+        writeln!(log, "# t_s event details")?;
+        log.flush()?;
+        Ok(Controller {
+            plant: Plant::new(cfg, &model, limits),
+            cfg,
+            model,
+            limits,
+            ports,
+            log,
+            start: Instant::now(),
+            guard: Guard::default(),
+            summary: Summary::default(),
+            active: false,
+            halted: false,
+            state_bits: 0,
+            last_setpoint: Instant::now(),
+            js_seq: 0,
+            window_error: 0.0,
+            window_latency: 0,
+            last_sp_seq: 0,
+            last_latency: 0,
+        })
+    }
+
+    /// Seconds since the controller started (the log's time).
+    fn t(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    /// Writes one event line and flushes it.
+    fn event(&mut self, what: std::fmt::Arguments) -> Result<()> {
+        let t = self.t();
+        writeln!(self.log, "{t:.3} {what}")?;
+        self.log.flush()?;
+        Ok(())
+    }
+
+    /// Publishes the measured state of this cycle.
+    fn publish(&mut self, sp_seq: u64, latency: u64) -> Result<()> {
+        self.js_seq += 1;
+        self.summary.cycles += 1;
+        let e = self.plant.tracking_error();
+        self.summary.max_tracking_error = self.summary.max_tracking_error.max(e);
+        self.ports.publish(JointStateMsg {
+            seq: self.js_seq,
+            t_ns: now_ns(),
+            setpoint_seq: sp_seq,
+            setpoint_latency_ns: latency,
+            q: self.plant.servo.q,
+            qd: self.plant.servo.qd,
+            base: self.plant.base_pose(),
+            gripper: self.plant.gripper,
+            tracking_error: e,
+            status: self.state_bits,
+            lost: self.guard.lost,
+            repeated: self.guard.repeated,
+            rejected: self.guard.rejected,
+        })?;
+        Ok(())
+    }
+
+    /// One cycle driven by setpoint `sp`: session bookkeeping, admission, one plant step,
+    /// publish.
+    fn on_setpoint(&mut self, sp: SetpointMsg) -> Result<Flow> {
+        let latency = now_ns().saturating_sub(sp.t_ns);
+        if sp.flags & flags::SHUTDOWN != 0 {
+            self.event(format_args!("shutdown requested"))?;
+            return Ok(Flow::Exit);
+        }
+        if sp.flags & flags::FIRST != 0 {
+            self.start_session()?;
+        }
+        let admission = self
+            .guard
+            .admit(&sp, &self.plant.q_ref, &self.model, &self.limits, DT);
+        self.summary.setpoints += 1;
+        match admission {
+            Admission::Follow if !self.halted => self.plant.follow(&sp),
+            Admission::Follow => {}
+            Admission::Repeated => return Ok(Flow::Skipped),
+            Admission::Refuse(r) => {
+                self.event(format_args!("refused setpoint {}: {r}; braking", sp.seq))?;
+                self.halted = true;
+                self.state_bits |= status::REJECTED | status::BRAKING;
+                self.plant.start_brake();
+            }
+        }
+        self.plant.step()?;
+        self.last_sp_seq = sp.seq;
+        self.last_latency = latency;
+        self.window_latency = self.window_latency.max(latency);
+        self.window_error = self.window_error.max(self.plant.tracking_error());
+        self.publish(sp.seq, latency)?;
+        self.last_setpoint = Instant::now();
+        if sp.flags & flags::LAST != 0 {
+            self.end_session(sp.seq)?;
+        }
+        if sp.seq.is_multiple_of(100) {
+            self.log_window(sp.seq)?;
+        }
+        Ok(Flow::Stepped)
+    }
+
+    /// A FIRST setpoint: a new session clears a latched halt.
+    fn start_session(&mut self) -> Result<()> {
+        self.active = true;
+        self.halted = false;
+        self.plant.brake = None;
+        self.plant.braked = false;
+        self.summary.sessions += 1;
+        self.state_bits = status::ACTIVE;
+        let t = self.t();
+        writeln!(self.log, "{t:.3} session start")?;
+        Ok(())
+    }
+
+    /// A LAST setpoint: the session's counts go into the summary.
+    fn end_session(&mut self, seq: u64) -> Result<()> {
+        self.active = false;
+        self.state_bits &= !status::ACTIVE;
+        let g = &self.guard;
+        self.summary.lost += g.lost as u64;
+        self.summary.repeated += g.repeated as u64;
+        self.summary.rejected += g.rejected as u64;
+        let (lost, repeated, rejected) = (g.lost, g.repeated, g.rejected);
+        self.event(format_args!(
+            "session end: {seq} setpoints, lost {lost}, repeated {repeated}, refused {rejected}"
+        ))
+    }
+
+    /// Every 100th setpoint: the window's largest tracking error and latency.
+    fn log_window(&mut self, seq: u64) -> Result<()> {
+        let t = self.t();
+        writeln!(
+            self.log,
+            "{t:.3} track seq {seq} max_error_mrad {:.3} max_latency_us {:.1}",
+            self.window_error * 1e3,
+            self.window_latency as f64 * 1e-3
+        )?;
+        self.window_error = 0.0;
+        self.window_latency = 0;
+        Ok(())
+    }
+
+    /// A cycle without a setpoint: the reference coasts, or after `watchdog_cycles` the
+    /// watchdog brakes; one plant step; publish.
+    fn on_silence(&mut self, now: Instant) -> Result<()> {
+        if self.active && !self.halted {
+            let silent = (now - self.last_setpoint).as_secs_f64() / DT;
+            if silent >= self.cfg.watchdog_cycles as f64 {
+                let seq = self.last_sp_seq;
+                self.event(format_args!(
+                    "watchdog: no setpoint for {silent:.1} ms after seq {seq}; braking"
+                ))?;
+                self.summary.watchdog_trips += 1;
+                self.halted = true;
+                self.state_bits |= status::WATCHDOG | status::BRAKING;
+                self.plant.start_brake();
+            } else {
+                self.plant.coast();
+            }
+        }
+        self.plant.step()?;
+        if self.plant.braked && self.state_bits & status::BRAKING != 0 {
+            self.state_bits &= !status::BRAKING;
+            self.event(format_args!("standstill"))?;
+        }
+        self.publish(self.last_sp_seq, self.last_latency)
+    }
+
+    /// The exit line of the log; the summary.
+    fn finish(mut self) -> Result<Summary> {
+        let s = self.summary.clone();
+        self.event(format_args!(
+            "exit: {} cycles, {} sessions, {} setpoints, lost {}, repeated {}, refused {}, watchdog trips {}, max tracking error {:.3} mrad",
+            s.cycles,
+            s.sessions,
+            s.setpoints,
+            s.lost,
+            s.repeated,
+            s.rejected,
+            s.watchdog_trips,
+            s.max_tracking_error * 1e3
+        ))?;
+        Ok(s)
+    }
+}
+
 /// Runs the controller until SIGINT/SIGTERM, a SHUTDOWN setpoint or (optionally) the loss of
-/// its parent process.
+/// its parent process: a setpoint wakes it for [`Controller::on_setpoint`]; a period without
+/// one runs [`Controller::on_silence`].
 pub fn run(cfg: &Config) -> Result<Summary> {
-    let model = RobotModel::kmr_iiwa14();
-    let limits = MotionLimits::kmr_iiwa(&model);
     let node = link::node(&link::controller_node_name(&cfg.cell))?;
     let ports = ControllerPorts::open(&node, &cfg.cell)?;
     let waitset = WaitSetBuilder::new()
         .create::<link::Ipc>()
-        .map_err(|e| anyhow::anyhow!("waitset: {e:?}"))?;
+        .map_err(|e| ControllerError::WaitSet(format!("{e:?}")))?;
     let _guard = waitset
         .attach_notification(&ports.ready)
-        .map_err(|e| anyhow::anyhow!("waitset attach: {e:?}"))?;
-    let log_file = std::fs::File::create(&cfg.log)
-        .with_context(|| format!("creating the log {}", cfg.log.display()))?;
-    let mut log = std::io::BufWriter::with_capacity(1 << 16, log_file);
-    writeln!(
-        log,
-        "# prf firmware-sim, cell {:?}, servo {:.1} Hz ζ {:.2}, watchdog {} cycles, gripper {:.2} s",
-        cfg.cell, cfg.servo.bandwidth_hz, cfg.servo.damping, cfg.watchdog_cycles, cfg.gripper_time
-    )?;
-    writeln!(log, "# t_s event details")?;
-    log.flush()?;
-
+        .map_err(|e| ControllerError::WaitSet(format!("attach: {e:?}")))?;
+    let mut c = Controller::new(cfg, &ports)?;
     let parent = rustix::process::getppid();
-    let start = Instant::now();
-    let mut plant = Plant::new(cfg, &model, limits);
-    let mut guard = Guard::default();
-    let mut summary = Summary::default();
-    let mut active = false;
-    // Watchdog or refusal: latched (setpoints ignored, arm braked) until the next FIRST.
-    let mut halted = false;
-    let mut state_bits = 0u32;
-    let mut last_setpoint = Instant::now();
-    let mut next = Instant::now() + Duration::from_millis(1);
-    let mut js_seq = 0u64;
-    let mut window_error = 0.0f64;
-    let mut window_latency = 0u64;
-    let mut last_sp_seq = 0u64;
-    let mut last_latency = 0u64;
     let period = Duration::from_millis(1);
-    let t = |start: Instant| start.elapsed().as_secs_f64();
-
-    let mut publish = |plant: &Plant,
-                       bits: u32,
-                       g: &Guard,
-                       sp_seq: u64,
-                       latency: u64,
-                       summary: &mut Summary|
-     -> Result<()> {
-        js_seq += 1;
-        summary.cycles += 1;
-        let e = plant.tracking_error();
-        summary.max_tracking_error = summary.max_tracking_error.max(e);
-        ports.publish(JointStateMsg {
-            seq: js_seq,
-            t_ns: now_ns(),
-            setpoint_seq: sp_seq,
-            setpoint_latency_ns: latency,
-            q: plant.servo.q,
-            qd: plant.servo.qd,
-            base: plant.base_pose(),
-            gripper: plant.gripper,
-            tracking_error: e,
-            status: bits,
-            lost: g.lost,
-            repeated: g.repeated,
-            rejected: g.rejected,
-        })?;
-        Ok(())
-    };
-
+    let mut next = Instant::now() + period;
     'cycle: loop {
         let timeout = next.saturating_duration_since(Instant::now());
         let run = waitset
             .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, timeout)
-            .map_err(|e| anyhow::anyhow!("waitset: {e:?}"))?;
+            .map_err(|e| ControllerError::WaitSet(format!("{e:?}")))?;
         if matches!(
             run,
             WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt
         ) {
-            writeln!(log, "{:.3} exit signal", t(start))?;
+            c.event(format_args!("exit signal"))?;
             break;
         }
-        ports
+        c.ports
             .ready
             .try_wait(|_| {})
-            .map_err(|e| anyhow::anyhow!("listener: {e:?}"))?;
+            .map_err(|e| IpcError::new("listener of the setpoint event", e))?;
         let mut stepped = false;
-        while let Some(sample) = ports
+        while let Some(sample) = c
+            .ports
             .setpoint
             .receive()
-            .map_err(|e| anyhow::anyhow!("receive: {e:?}"))?
+            .map_err(|e| IpcError::new("receive a setpoint", e))?
         {
             let sp = *sample;
             drop(sample);
-            let latency = now_ns().saturating_sub(sp.t_ns);
-            if sp.flags & flags::SHUTDOWN != 0 {
-                writeln!(log, "{:.3} shutdown requested", t(start))?;
-                break 'cycle;
-            }
-            if sp.flags & flags::FIRST != 0 {
-                active = true;
-                halted = false;
-                plant.brake = None;
-                plant.braked = false;
-                summary.sessions += 1;
-                state_bits = status::ACTIVE;
-                writeln!(log, "{:.3} session start", t(start))?;
-            }
-            let admission = guard.admit(&sp, &plant.q_ref, &model, &limits, DT);
-            summary.setpoints += 1;
-            match admission {
-                Admission::Follow if !halted => plant.follow(&sp),
-                Admission::Follow => {}
-                Admission::Repeated => continue,
-                Admission::Refuse(r) => {
-                    writeln!(
-                        log,
-                        "{:.3} refused setpoint {}: {r}; braking",
-                        t(start),
-                        sp.seq
-                    )?;
-                    log.flush()?;
-                    halted = true;
-                    state_bits |= status::REJECTED | status::BRAKING;
-                    plant.start_brake();
-                }
-            }
-            plant.step()?;
-            last_sp_seq = sp.seq;
-            last_latency = latency;
-            window_latency = window_latency.max(latency);
-            window_error = window_error.max(plant.tracking_error());
-            publish(&plant, state_bits, &guard, sp.seq, latency, &mut summary)?;
-            stepped = true;
-            last_setpoint = Instant::now();
-            if sp.flags & flags::LAST != 0 {
-                active = false;
-                state_bits &= !status::ACTIVE;
-                summary.lost += guard.lost as u64;
-                summary.repeated += guard.repeated as u64;
-                summary.rejected += guard.rejected as u64;
-                writeln!(
-                    log,
-                    "{:.3} session end: {} setpoints, lost {}, repeated {}, refused {}",
-                    t(start),
-                    sp.seq,
-                    guard.lost,
-                    guard.repeated,
-                    guard.rejected
-                )?;
-                log.flush()?;
-            }
-            if sp.seq % 100 == 0 {
-                writeln!(
-                    log,
-                    "{:.3} track seq {} max_error_mrad {:.3} max_latency_us {:.1}",
-                    t(start),
-                    sp.seq,
-                    window_error * 1e3,
-                    window_latency as f64 * 1e-3
-                )?;
-                window_error = 0.0;
-                window_latency = 0;
+            match c.on_setpoint(sp)? {
+                Flow::Exit => break 'cycle,
+                Flow::Stepped => stepped = true,
+                Flow::Skipped => {}
             }
         }
         let now = Instant::now();
@@ -358,64 +502,19 @@ pub fn run(cfg: &Config) -> Result<Summary> {
         if now < next {
             continue;
         }
-        // A cycle without a setpoint.
-        if active && !halted {
-            let silent = (now - last_setpoint).as_secs_f64() / DT;
-            if silent >= cfg.watchdog_cycles as f64 {
-                writeln!(
-                    log,
-                    "{:.3} watchdog: no setpoint for {:.1} ms after seq {}; braking",
-                    t(start),
-                    silent,
-                    last_sp_seq
-                )?;
-                log.flush()?;
-                summary.watchdog_trips += 1;
-                halted = true;
-                state_bits |= status::WATCHDOG | status::BRAKING;
-                plant.start_brake();
-            } else {
-                plant.coast();
-            }
-        }
-        plant.step()?;
-        if plant.braked && state_bits & status::BRAKING != 0 {
-            state_bits &= !status::BRAKING;
-            writeln!(log, "{:.3} standstill", t(start))?;
-            log.flush()?;
-        }
-        publish(
-            &plant,
-            state_bits,
-            &guard,
-            last_sp_seq,
-            last_latency,
-            &mut summary,
-        )?;
+        c.on_silence(now)?;
         next = if now > next + period * 10 {
             now + period
         } else {
             next + period
         };
-        if cfg.exit_with_parent && summary.cycles % 100 == 0 && rustix::process::getppid() != parent
+        if cfg.exit_with_parent
+            && c.summary.cycles.is_multiple_of(100)
+            && rustix::process::getppid() != parent
         {
-            writeln!(log, "{:.3} parent process gone; exiting", t(start))?;
+            c.event(format_args!("parent process gone; exiting"))?;
             break;
         }
     }
-    writeln!(
-        log,
-        "{:.3} exit: {} cycles, {} sessions, {} setpoints, lost {}, repeated {}, refused {}, watchdog trips {}, max tracking error {:.3} mrad",
-        t(start),
-        summary.cycles,
-        summary.sessions,
-        summary.setpoints,
-        summary.lost,
-        summary.repeated,
-        summary.rejected,
-        summary.watchdog_trips,
-        summary.max_tracking_error * 1e3
-    )?;
-    log.flush()?;
-    Ok(summary)
+    c.finish()
 }

@@ -10,5 +10,5 @@ struct Cli {
 }
 
 fn main() -> anyhow::Result<()> {
-    prf_firmware_sim::cli::run(&Cli::parse().args)
+    Ok(prf_firmware_sim::cli::run(&Cli::parse().args)?)
 }

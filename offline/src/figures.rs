@@ -1,101 +1,72 @@
-//! Minimal SVG line plots (no dependencies): enough for a figure a person can open.
+//! Charts as SVG files (plotters), for a figure a person can open.
 
-use std::fmt::Write as _;
+use plotters::prelude::*;
 
 /// One named polyline of (x, y) points.
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
-    /// Emphasised (thicker, dark) line, e.g. the demonstration.
+    /// Emphasised (thicker, black) line, e.g. the demonstration.
     pub emphasis: bool,
 }
 
-const PALETTE: [&str; 8] = [
-    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf",
-];
+/// The range of `values` with 5 % padding (a unit range when they are all equal or none).
+fn padded(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    if !(hi > lo) {
+        let c = if lo.is_finite() { lo } else { 0.0 };
+        return c - 0.5..c + 0.5;
+    }
+    let pad = (hi - lo) * 0.05;
+    lo - pad..hi + pad
+}
 
-/// Renders the series as an SVG line plot with axes, ticks, labels and a legend.
-pub fn line_plot(title: &str, x_label: &str, y_label: &str, series: &[Series]) -> String {
-    let (w, h, left, right, top, bottom) = (900.0, 540.0, 80.0, 220.0, 50.0, 60.0);
-    let all = series.iter().flat_map(|s| s.points.iter());
-    let (mut x0, mut x1, mut y0, mut y1) = (
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    );
-    for &(x, y) in all {
-        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+/// The series as an SVG line plot with a title, labelled axes, a grid and a legend.
+pub fn line_plot(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> anyhow::Result<String> {
+    let points = || series.iter().flat_map(|s| s.points.iter());
+    let xs = padded(points().map(|p| p.0));
+    let ys = padded(points().map(|p| p.1));
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 540)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(xs, ys)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .light_line_style(WHITE.mix(0.0))
+            .draw()?;
+        for (i, s) in series.iter().enumerate() {
+            let style = if s.emphasis {
+                BLACK.stroke_width(3)
+            } else {
+                Palette99::pick(i).stroke_width(1)
+            };
+            chart
+                .draw_series(LineSeries::new(s.points.iter().copied(), style))?
+                .label(s.name.as_str())
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], style));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+        root.present()?;
     }
-    if !(x1 > x0) {
-        x1 = x0 + 1.0;
-    }
-    let pad = ((y1 - y0) * 0.05).max(1e-9);
-    (y0, y1) = (y0 - pad, y1 + pad);
-    let px = |x: f64| left + (x - x0) / (x1 - x0) * (w - left - right);
-    let py = |y: f64| h - bottom - (y - y0) / (y1 - y0) * (h - top - bottom);
-    let mut s = String::new();
-    let _ = write!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="13"><rect width="100%" height="100%" fill="white"/><text x="{}" y="28" font-size="16" text-anchor="middle">{title}</text>"#,
-        (left + w - right) / 2.0
-    );
-    let _ = write!(
-        s,
-        r#"<rect x="{left}" y="{top}" width="{}" height="{}" fill="none" stroke="black"/>"#,
-        w - left - right,
-        h - top - bottom
-    );
-    for i in 0..=5 {
-        let (xv, yv) = (
-            x0 + (x1 - x0) * i as f64 / 5.0,
-            y0 + (y1 - y0) * i as f64 / 5.0,
-        );
-        let _ = write!(
-            s,
-            r##"<line x1="{0}" y1="{1}" x2="{0}" y2="{2}" stroke="#ddd"/><text x="{0}" y="{3}" text-anchor="middle">{xv:.2}</text><line x1="{4}" y1="{5}" x2="{6}" y2="{5}" stroke="#ddd"/><text x="{7}" y="{8}" text-anchor="end">{yv:.3}</text>"##,
-            px(xv),
-            top,
-            h - bottom,
-            h - bottom + 18.0,
-            left,
-            py(yv),
-            w - right,
-            left - 6.0,
-            py(yv) + 4.0
-        );
-    }
-    let _ = write!(
-        s,
-        r#"<text x="{}" y="{}" text-anchor="middle">{x_label}</text><text x="18" y="{}" text-anchor="middle" transform="rotate(-90 18 {})">{y_label}</text>"#,
-        (left + w - right) / 2.0,
-        h - 15.0,
-        (top + h - bottom) / 2.0,
-        (top + h - bottom) / 2.0
-    );
-    for (i, ser) in series.iter().enumerate() {
-        let (color, width) = if ser.emphasis {
-            ("#000", 3.0)
-        } else {
-            (PALETTE[i % PALETTE.len()], 1.5)
-        };
-        let pts: Vec<String> = ser
-            .points
-            .iter()
-            .map(|&(x, y)| format!("{:.1},{:.1}", px(x), py(y)))
-            .collect();
-        let _ = write!(
-            s,
-            r#"<polyline fill="none" stroke="{color}" stroke-width="{width}" points="{}"/><line x1="{}" y1="{2}" x2="{3}" y2="{2}" stroke="{color}" stroke-width="{width}"/><text x="{4}" y="{5}">{6}</text>"#,
-            pts.join(" "),
-            w - right + 12.0,
-            top + 12.0 + 20.0 * i as f64,
-            w - right + 36.0,
-            w - right + 42.0,
-            top + 16.0 + 20.0 * i as f64,
-            ser.name
-        );
-    }
-    s.push_str("</svg>\n");
-    s
+    Ok(svg)
 }

@@ -78,6 +78,6 @@ fn main() -> anyhow::Result<()> {
         Some(Command::BenchCell(args)) => bench::cell::run(&args),
         Some(Command::Firmware(args)) => firmware::run(&args),
         Some(Command::IpcPeer(args)) => bench::cell::peer(&args),
-        Some(Command::FirmwareSim(args)) => prf_firmware_sim::cli::run(&args),
+        Some(Command::FirmwareSim(args)) => Ok(prf_firmware_sim::cli::run(&args)?),
     }
 }

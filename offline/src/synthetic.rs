@@ -1,5 +1,5 @@
-//! A synthetic joint-space demonstration, the stand-in for a robot log until the example
-//! cell's demonstration generator exists: a minimum-jerk reach with an elbow swivel.
+//! A synthetic joint-space demonstration for `prf rdmp-demo` and the math benches, which need
+//! no cell: a minimum-jerk reach with an elbow swivel.
 
 use prf_shared::profile::min_jerk;
 use prf_shared::{JointVector, NA};

@@ -130,7 +130,7 @@ fn generated_dataset_is_collision_free_within_limits_and_does_the_task() {
             for k in 0..3 {
                 assert!(
                     (s.base[k] - home[k]).abs() < 1e-9
-                        || k == 2 && (validate::wrap_angle(s.base[k] - home[k])).abs() < 1e-9,
+                        || k == 2 && (prf_shared::se3::wrap(s.base[k] - home[k])).abs() < 1e-9,
                     "{}",
                     d.id
                 );

@@ -195,12 +195,7 @@ impl core::error::Error for Fault {
     }
 }
 
-/// [x, y, yaw] of a platform pose.
-pub fn planar(p: &Pose) -> [f64; 3] {
-    let yaw = p.rotation.euler_angles().2;
-    [p.translation.x, p.translation.y, yaw]
-}
-
+pub use prf_shared::kinematics::planar;
 pub use prf_shared::se3::wrap;
 
 /// The executor of one program.

@@ -83,6 +83,12 @@ pub fn platform_pose(q_m: [f64; 3]) -> Pose {
     )
 }
 
+/// [x, y, yaw] of a platform pose: the inverse of [`platform_pose`].
+pub fn planar(p: &Pose) -> [f64; 3] {
+    let yaw = p.rotation.euler_angles().2;
+    [p.translation.x, p.translation.y, yaw]
+}
+
 /// Pose of the arm base frame in the world.
 pub fn arm_base_pose(model: &RobotModel, q_m: [f64; 3]) -> Pose {
     platform_pose(q_m) * model.mount

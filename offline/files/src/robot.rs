@@ -9,7 +9,6 @@
 //! configuration. Errors name the file and, where the JSON has one, the line.
 
 use crate::line_of;
-use anyhow::{Context, bail};
 use nalgebra::{Unit, Vector3};
 use prf_shared::NA;
 use prf_shared::robot::{Joint, MAX_SPHERES, PlatformBox, RobotModel, Sphere};
@@ -41,6 +40,48 @@ struct SphereEntry {
     radius: f64,
 }
 
+/// Why a robot description was refused; every message names the file (and the line where the
+/// JSON has one).
+#[derive(Debug, thiserror::Error)]
+pub enum RobotFileError {
+    #[error("reading {path}")]
+    Read {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{file}: not a valid URDF")]
+    Urdf {
+        file: String,
+        #[source]
+        source: urdf_rs::UrdfError,
+    },
+    #[error("{file}:{line}: {source}")]
+    Json {
+        file: String,
+        line: usize,
+        #[source]
+        source: serde_json::Error,
+    },
+    #[error("{urdf} + {spheres}: invalid robot model: {source}")]
+    Model {
+        urdf: String,
+        spheres: String,
+        #[source]
+        source: prf_shared::robot::ModelError,
+    },
+    /// The description parses but is not a robot the runtime takes (the message says why).
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Returns `RobotFileError::Invalid` with a formatted message.
+macro_rules! invalid {
+    ($($arg:tt)*) => {
+        return Err(RobotFileError::Invalid(format!($($arg)*)))
+    };
+}
+
 fn pose(o: &urdf_rs::Pose) -> Pose {
     pose_from_xyz_rpy(o.xyz.0, o.rpy.0)
 }
@@ -52,9 +93,11 @@ pub fn parse(
     urdf_name: &str,
     spheres: &str,
     spheres_name: &str,
-) -> anyhow::Result<RobotModel> {
-    let robot = urdf_rs::read_from_string(urdf)
-        .with_context(|| format!("{urdf_name}: not a valid URDF"))?;
+) -> Result<RobotModel, RobotFileError> {
+    let robot = urdf_rs::read_from_string(urdf).map_err(|source| RobotFileError::Urdf {
+        file: urdf_name.to_string(),
+        source,
+    })?;
     let children: Vec<&str> = robot.joints.iter().map(|j| j.child.link.as_str()).collect();
     let roots: Vec<&urdf_rs::Link> = robot
         .links
@@ -62,7 +105,7 @@ pub fn parse(
         .filter(|l| !children.contains(&l.name.as_str()))
         .collect();
     let [root] = roots[..] else {
-        bail!(
+        invalid!(
             "{urdf_name}: expected one root link (the platform base), found {}",
             roots.len()
         );
@@ -78,7 +121,7 @@ pub fn parse(
             .count()
             > 1
         {
-            bail!("{urdf_name}: link '{link}' branches; the robot must be one chain");
+            invalid!("{urdf_name}: link '{link}' branches; the robot must be one chain");
         }
         chain.push(j);
         link = &j.child.link;
@@ -97,21 +140,21 @@ pub fn parse(
             )
         })
     {
-        bail!(
+        invalid!(
             "{urdf_name}: expected {NA} revolute joints and fixed joints only, found {} movable",
             revolute.len()
         );
     }
     let (first, last) = (revolute[0], revolute[NA - 1]);
     if revolute.windows(2).any(|w| w[1] != w[0] + 1) {
-        bail!("{urdf_name}: fixed joints between the arm's revolute joints are not supported");
+        invalid!("{urdf_name}: fixed joints between the arm's revolute joints are not supported");
     }
     let mount = chain[..first]
         .iter()
         .fold(Pose::identity(), |p, j| p * pose(&j.origin));
     let after = &chain[last + 1..];
     let Some((flange_joint, to_tcp)) = after.split_first() else {
-        bail!("{urdf_name}: no fixed joint to a flange link after the last revolute joint");
+        invalid!("{urdf_name}: no fixed joint to a flange link after the last revolute joint");
     };
     let flange = pose(&flange_joint.origin);
     let tcp = to_tcp
@@ -128,7 +171,7 @@ pub fn parse(
         let j = chain[i];
         let axis = Vector3::from(j.axis.xyz.0);
         if !(axis.norm() > 1e-9) {
-            bail!("{urdf_name}: joint '{}' has a zero axis", j.name);
+            invalid!("{urdf_name}: joint '{}' has a zero axis", j.name);
         }
         *slot = Joint {
             origin: pose(&j.origin),
@@ -148,28 +191,32 @@ pub fn parse(
             }),
             _ => None,
         })
-        .with_context(|| {
-            format!(
+        .ok_or_else(|| {
+            RobotFileError::Invalid(format!(
                 "{urdf_name}: root link '{}' has no collision box",
                 root.name
-            )
+            ))
         })?;
     // Frames of the sphere file: the arm base link, links 1..7, the flange.
     let mut frames: Vec<&str> = vec![chain[first].parent.link.as_str()];
     frames.extend(revolute.iter().map(|&i| chain[i].child.link.as_str()));
     frames.push(flange_joint.child.link.as_str());
 
-    let file: SphereFile = serde_json::from_str(spheres)
-        .map_err(|e| anyhow::anyhow!("{spheres_name}:{}: {e}", e.line()))?;
+    let file: SphereFile =
+        serde_json::from_str(spheres).map_err(|source| RobotFileError::Json {
+            file: spheres_name.to_string(),
+            line: source.line(),
+            source,
+        })?;
     if file.format != "prf-spheres" || file.version != 1 {
-        bail!(
+        invalid!(
             "{spheres_name}: format '{}' v{}, expected 'prf-spheres' v1",
             file.format,
             file.version
         );
     }
     if file.spheres.len() > MAX_SPHERES {
-        bail!(
+        invalid!(
             "{spheres_name}: {} spheres, at most {MAX_SPHERES}",
             file.spheres.len()
         );
@@ -178,14 +225,14 @@ pub fn parse(
     for s in &file.spheres {
         let at = line_of(spheres, &format!("\"{}\"", s.link)).unwrap_or(0);
         let Some(link) = frames.iter().position(|f| *f == s.link) else {
-            bail!(
+            invalid!(
                 "{spheres_name}:{at}: sphere on link '{}', which is not a frame of the arm ({})",
                 s.link,
                 frames.join(", ")
             );
         };
         if !(s.radius > 0.0 && s.radius.is_finite()) || s.centre.iter().any(|v| !v.is_finite()) {
-            bail!(
+            invalid!(
                 "{spheres_name}:{at}: bad sphere on '{}': radius {}",
                 s.link,
                 s.radius
@@ -206,17 +253,23 @@ pub fn parse(
         platform,
         home: file.home_deg.map(|d| d.to_radians()),
     };
-    model
-        .validate()
-        .map_err(|e| anyhow::anyhow!("{urdf_name} + {spheres_name}: invalid robot model: {e}"))?;
+    model.validate().map_err(|source| RobotFileError::Model {
+        urdf: urdf_name.to_string(),
+        spheres: spheres_name.to_string(),
+        source,
+    })?;
     Ok(model)
 }
 
 /// Reads a URDF and a sphere file.
-pub fn load(urdf: &Path, spheres: &Path) -> anyhow::Result<RobotModel> {
-    let u = std::fs::read_to_string(urdf).with_context(|| format!("reading {}", urdf.display()))?;
-    let s = std::fs::read_to_string(spheres)
-        .with_context(|| format!("reading {}", spheres.display()))?;
+pub fn load(urdf: &Path, spheres: &Path) -> Result<RobotModel, RobotFileError> {
+    let read = |path: &Path| {
+        std::fs::read_to_string(path).map_err(|source| RobotFileError::Read {
+            path: path.display().to_string(),
+            source,
+        })
+    };
+    let (u, s) = (read(urdf)?, read(spheres)?);
     parse(
         &u,
         &urdf.display().to_string(),
@@ -226,7 +279,7 @@ pub fn load(urdf: &Path, spheres: &Path) -> anyhow::Result<RobotModel> {
 }
 
 /// The example cell's robot, from the shipped URDF and sphere file.
-pub fn example() -> anyhow::Result<RobotModel> {
+pub fn example() -> Result<RobotModel, RobotFileError> {
     parse(
         EXAMPLE_URDF,
         "offline/data/kmr_iiwa14.urdf",

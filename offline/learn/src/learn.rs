@@ -4,7 +4,6 @@
 use crate::affordance::AffordanceSet;
 use crate::skills::{self, ArmSkill, Skill};
 use crate::workspace::{self, LearnedField, Sweep, WorkspaceConfig};
-use anyhow::{Context, bail};
 use prf_files::dataset::{Dataset, Demonstration, Placed};
 use prf_files::{OnProgress, Progress};
 use prf_shared::JointVector;
@@ -101,15 +100,47 @@ fn location_of(d: &Demonstration, l: TaskLocation) -> &Placed {
     }
 }
 
+/// Why Learn refused a dataset.
+#[derive(Debug, thiserror::Error)]
+pub enum LearnError {
+    #[error(
+        "the acceptable clearance r = {acceptable} m exceeds the programs' clearance r_d = {demo} m"
+    )]
+    Clearance { acceptable: f64, demo: f64 },
+    #[error("demonstration {demonstration}: the {what} pose is not a valid pose")]
+    BadPose {
+        demonstration: String,
+        what: &'static str,
+    },
+    #[error("demonstration {demonstration}: part type {kind} is not among the dataset's parts")]
+    PartType { demonstration: String, kind: String },
+    #[error(
+        "demonstration {demonstration} (lines {first}–{last} of its trajectory): {class} arm motion cannot be trained: {source}"
+    )]
+    Skill {
+        demonstration: String,
+        first: usize,
+        last: usize,
+        class: &'static str,
+        #[source]
+        source: prf_shared::rdmp::RdmpError,
+    },
+}
+
 /// Pose of frame `f` at sample `at` of an instance.
 fn frame_pose(
     model: &RobotModel,
     d: &Demonstration,
     inst: &Instance,
     f: Frame,
-) -> anyhow::Result<Option<Pose>> {
+) -> Result<Option<Pose>, LearnError> {
     let s = &d.samples[inst.at];
-    let placed = |p: &[f64; 7]| pose_from_array(*p).context("bad pose in task");
+    let placed = |p: &[f64; 7]| {
+        pose_from_array(*p).ok_or_else(|| LearnError::BadPose {
+            demonstration: d.id.clone(),
+            what: "part or location",
+        })
+    };
     Ok(match f {
         Frame::World => Some(Pose::identity()),
         Frame::Base => Some(platform_pose(s.base)),
@@ -139,13 +170,16 @@ fn lessons(
     ds: &Dataset,
     d: &Demonstration,
     cfg: &LearnConfig,
-) -> anyhow::Result<Vec<Lesson>> {
+) -> Result<Vec<Lesson>, LearnError> {
     let kinds: Vec<String> = location_kinds(ds);
     let part_kinds = part_kinds(ds);
     let part_type = part_kinds
         .iter()
         .position(|k| *k == d.task.part.kind)
-        .context("part type")?;
+        .ok_or_else(|| LearnError::PartType {
+            demonstration: d.id.clone(),
+            kind: d.task.part.kind.clone(),
+        })?;
     let mut out = Vec::new();
     for m in CLASSES.iter() {
         let mut instances = Vec::new();
@@ -165,8 +199,12 @@ fn lessons(
             let sweep = if m.learns_workspace() {
                 match (inst.location, fr.workspace) {
                     (Some(l), Frame::Location) => {
-                        let loc =
-                            pose_from_array(location_of(d, l).pose).context("location pose")?;
+                        let loc = pose_from_array(location_of(d, l).pose).ok_or_else(|| {
+                            LearnError::BadPose {
+                                demonstration: d.id.clone(),
+                                what: "location",
+                            }
+                        })?;
                         let s = &d.samples[inst.at];
                         let path = d.samples[inst.range.clone()]
                             .iter()
@@ -183,15 +221,12 @@ fn lessons(
                 (Some(a), true) => {
                     let (path, dt) = skills::uniform_path(&d.samples[a.forward.clone()]);
                     let rdmp = skills::train(model, &path, dt, &cfg.dmp, cfg.min_manipulability)
-                        .map_err(|e| {
-                            anyhow::anyhow!(
-                                "demonstration {} (lines {}–{} of its trajectory): {} arm motion \
-                                 cannot be trained: {e}",
-                                d.id,
-                                line(a.forward.start),
-                                line(a.forward.end - 1),
-                                m.name()
-                            )
+                        .map_err(|source| LearnError::Skill {
+                            demonstration: d.id.clone(),
+                            first: line(a.forward.start),
+                            last: line(a.forward.end - 1),
+                            class: m.name(),
+                            source,
                         })?;
                     Some((path, dt, rdmp))
                 }
@@ -238,15 +273,14 @@ pub fn learn(
     model: &RobotModel,
     cfg: &LearnConfig,
     progress: OnProgress<'_>,
-) -> anyhow::Result<Knowledge> {
+) -> Result<Knowledge, LearnError> {
     let mut wc = cfg.workspace;
     wc.epsilon = cfg.clearance_demo - cfg.clearance_acceptable;
     if !(wc.epsilon >= 0.0) {
-        bail!(
-            "the acceptable clearance r = {} m exceeds the programs' clearance r_d = {} m",
-            cfg.clearance_acceptable,
-            cfg.clearance_demo
-        );
+        return Err(LearnError::Clearance {
+            acceptable: cfg.clearance_acceptable,
+            demo: cfg.clearance_demo,
+        });
     }
     progress(Progress::Total(
         (ds.demonstrations.len() + location_kinds(ds).len()) as u64,
@@ -261,7 +295,7 @@ pub fn learn(
             progress(Progress::Done(1));
             l
         })
-        .collect::<anyhow::Result<_>>()?;
+        .collect::<Result<_, LearnError>>()?;
     let t_segment = t0.elapsed().as_secs_f64();
     let kinds = location_kinds(ds);
     let mut location_types: Vec<LocationTypeKnowledge> = kinds

@@ -19,6 +19,6 @@ pub mod report;
 pub mod skills;
 pub mod workspace;
 
-pub use compile::compile;
-pub use learn::{Knowledge, LearnConfig, learn};
-pub use report::report;
+pub use compile::{CompileError, compile};
+pub use learn::{Knowledge, LearnConfig, LearnError, learn};
+pub use report::{ReportError, report};

@@ -5,13 +5,26 @@ use prf_shared::field::Field;
 use prf_shared::motion::CLASSES;
 use std::fmt::Write;
 
+/// Why a blob's report could not be made: the blob is invalid.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error("invalid blob: {0}")]
+    Blob(#[from] prf_shared::blob::BlobError),
+    #[error("invalid blob: workspace: {0}")]
+    Field(#[from] prf_shared::field::FieldError),
+    #[error("encoding the robot record")]
+    Encode(#[from] postcard::Error),
+    #[error("formatting the report")]
+    Format(#[from] std::fmt::Error),
+}
+
 fn kib(b: usize) -> String {
     format!("{:.1} KiB", b as f64 / 1024.0)
 }
 
 /// A validated blob's contents and sizes, as `prf inspect` prints them.
-pub fn report(bytes: &[u8]) -> anyhow::Result<String> {
-    let blob = Blob::parse(bytes).map_err(|e| anyhow::anyhow!("invalid blob: {e}"))?;
+pub fn report(bytes: &[u8]) -> Result<String, ReportError> {
+    let blob = Blob::parse(bytes)?;
     let p = &blob.payload;
     let robot = blob.robot()?;
     let mut o = String::new();

@@ -14,15 +14,26 @@ pub mod world;
 
 use prf_files::OnProgress;
 
+/// Why a blob could not be made from generated demonstrations.
+#[derive(Debug, thiserror::Error)]
+pub enum DemonstrationBlobError {
+    #[error(transparent)]
+    Generate(#[from] demogen::GenerateError),
+    #[error(transparent)]
+    Learn(#[from] prf_learn::LearnError),
+    #[error(transparent)]
+    Compile(#[from] prf_learn::CompileError),
+}
+
 /// The blob of a world from the demonstrations of `chosen`: generate them with the
 /// ground-truth planner (seed 1, 100 Hz), learn with the default settings, compile.
 pub fn blob_of_demonstrations(
     world: &world::World,
     chosen: &[world::AffordedTask],
     progress: OnProgress<'_>,
-) -> anyhow::Result<Vec<u8>> {
+) -> Result<Vec<u8>, DemonstrationBlobError> {
     let model = prf_shared::robot::RobotModel::kmr_iiwa14();
     let ds = demogen::generate_dataset(world, chosen, 1, 100.0, progress)?;
     let k = prf_learn::learn(&ds, &model, &prf_learn::LearnConfig::default(), progress)?;
-    prf_learn::compile(&k)
+    Ok(prf_learn::compile(&k)?)
 }

@@ -3,9 +3,23 @@
 //! platform's home). Only the floor plan is read; the obstacles stay ground truth.
 
 use crate::world::World;
-use anyhow::bail;
 use prf_runtime::task::{Placed, Task};
 use prf_shared::se3::Pose;
+
+/// Why a task cannot be made on a floor plan.
+#[derive(Debug, thiserror::Error)]
+pub enum FloorTaskError {
+    #[error("unknown part id {id:?} (the floor plan has {known})")]
+    UnknownPart { id: String, known: String },
+    #[error("unknown location id {id:?} (the floor plan has {known})")]
+    UnknownLocation { id: String, known: String },
+    #[error("task {task}: {source}")]
+    TaskBlock {
+        task: String,
+        #[source]
+        source: prf_runtime::task_block::TaskBlockError,
+    },
+}
 
 /// A task with owned names, resolved on a floor plan.
 #[derive(Clone, Debug)]
@@ -22,20 +36,21 @@ pub struct FloorTask {
 
 impl FloorTask {
     /// Part `part` from location `from` to location `to`, by instance id.
-    pub fn new(world: &World, part: &str, from: &str, to: &str) -> anyhow::Result<Self> {
+    pub fn new(world: &World, part: &str, from: &str, to: &str) -> Result<Self, FloorTaskError> {
         let ids = |v: Vec<&str>| v.join(", ");
         let Some(p) = world.part_index(part) else {
-            bail!(
-                "unknown part id {part:?} (the floor plan has {})",
-                ids(world.parts.iter().map(|p| p.id.as_str()).collect())
-            );
+            return Err(FloorTaskError::UnknownPart {
+                id: part.to_string(),
+                known: ids(world.parts.iter().map(|p| p.id.as_str()).collect()),
+            });
         };
-        let loc = |id: &str| match world.location_index(id) {
-            Some(i) => Ok(i),
-            None => bail!(
-                "unknown location id {id:?} (the floor plan has {})",
-                ids(world.locations.iter().map(|l| l.id.as_str()).collect())
-            ),
+        let loc = |id: &str| {
+            world
+                .location_index(id)
+                .ok_or_else(|| FloorTaskError::UnknownLocation {
+                    id: id.to_string(),
+                    known: ids(world.locations.iter().map(|l| l.id.as_str()).collect()),
+                })
         };
         let (f, t) = (loc(from)?, loc(to)?);
         Ok(Self::from_indices(world, p, f, t))
@@ -76,10 +91,14 @@ impl FloorTask {
 
     /// The task as a task block ([`prf_runtime::task_block`]), as the firmware reads it from
     /// its TASK region.
-    pub fn task_block(&self) -> anyhow::Result<Vec<u8>> {
+    pub fn task_block(&self) -> Result<Vec<u8>, FloorTaskError> {
         let mut buf = [0u8; 1024];
-        let n = prf_runtime::task_block::encode(&self.task(), &mut buf)
-            .map_err(|e| anyhow::anyhow!("task {}: {e}", self.label()))?;
+        let n = prf_runtime::task_block::encode(&self.task(), &mut buf).map_err(|source| {
+            FloorTaskError::TaskBlock {
+                task: self.label(),
+                source,
+            }
+        })?;
         Ok(buf[..n].to_vec())
     }
 

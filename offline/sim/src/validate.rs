@@ -9,6 +9,7 @@ use crate::world::geometry::{Cell, Contact};
 use prf_files::dataset::Sample;
 use prf_shared::NA;
 pub use prf_shared::limits::MotionLimits;
+use prf_shared::se3::wrap;
 
 /// Relative tolerance on speed and acceleration limits: finite differences of stored samples
 /// (9 decimals) carry rounding noise of about 1e-5 in acceleration at 100 Hz.
@@ -50,13 +51,8 @@ fn axes(s: &Sample) -> [f64; 3 + NA] {
 fn delta(a: &[f64; 3 + NA], b: &[f64; 3 + NA]) -> [f64; 3 + NA] {
     std::array::from_fn(|k| {
         let d = b[k] - a[k];
-        if k == 2 { wrap_angle(d) } else { d }
+        if k == 2 { wrap(d) } else { d }
     })
-}
-
-/// The angle in [−π, π) equivalent to `a`.
-pub fn wrap_angle(a: f64) -> f64 {
-    (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
 }
 
 impl Report {

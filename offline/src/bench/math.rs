@@ -7,7 +7,7 @@
 use crate::synthetic;
 use anyhow::Result;
 use nalgebra::{SMatrix, Vector6};
-use prf_host::stats::percentiles;
+use prf_host::stats::{percentiles, quantile};
 use prf_shared::dmp::DmpParams;
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::nullspace::{kernel, pinv_apply};
@@ -51,7 +51,7 @@ fn measure(seconds: f64, batch: usize, mut f: impl FnMut()) -> Stats {
         per_call.push(t.elapsed().as_nanos() as f64 / batch as f64);
     }
     per_call.sort_by(f64::total_cmp);
-    let at = |q: f64| per_call[((per_call.len() - 1) as f64 * q).round() as usize];
+    let at = |q: f64| quantile(&per_call, q);
     Stats {
         median: at(0.5),
         p10: at(0.1),
@@ -248,7 +248,8 @@ fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
             "NOT met"
         }
     );
-    // Executor ticks on the first task's program against an ideal cell, each tick timed.
+    // Executor steps on the program of task 3 (Part1 CNC1 → Table1, the firmware's reference
+    // task) against an ideal cell, each step timed.
     let ft = &tasks[2];
     let p = plan(&rt, &ft.task()).map_err(|e| anyhow::anyhow!("{e}"))?;
     let program = p.program.ok_or_else(|| anyhow::anyhow!("no program"))?;

@@ -60,7 +60,7 @@ impl WorldArgs {
 /// Loads `--world` or the built-in example.
 pub fn load_world(path: &Option<PathBuf>) -> anyhow::Result<World> {
     match path {
-        Some(p) => World::load(p),
+        Some(p) => Ok(World::load(p)?),
         None => Ok(World::example()),
     }
 }

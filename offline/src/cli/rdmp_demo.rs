@@ -192,7 +192,7 @@ pub fn run(args: &Args) -> Result<()> {
             "t [s]",
             "x [m], arm base frame",
             &series,
-        );
+        )?;
         let path = dir.join("elbow.svg");
         std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
         println!("trajectories and elbow.svg written to {}", dir.display());

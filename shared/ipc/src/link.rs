@@ -24,7 +24,8 @@ pub struct IpcError {
 }
 
 impl IpcError {
-    fn new(what: impl Into<String>, detail: impl core::fmt::Debug) -> Self {
+    /// `what` failed with iceoryx2's error `detail`.
+    pub fn new(what: impl Into<String>, detail: impl core::fmt::Debug) -> Self {
         IpcError {
             what: what.into(),
             detail: format!("{detail:?}"),

@@ -10,7 +10,6 @@ pub use program::{GenConfig, GenError, Generator};
 
 use crate::validate::MotionLimits;
 use crate::world::{AffordedTask, World};
-use anyhow::bail;
 use prf_files::dataset::{Dataset, Demonstration, Instance};
 use prf_files::{OnProgress, Progress};
 use prf_shared::robot::RobotModel;
@@ -24,6 +23,14 @@ pub fn demo_seed(seed: u64, index: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// Demonstrations the generator could not program, each "demonstration i (task): why".
+#[derive(Debug, thiserror::Error)]
+#[error("{} of {total} demonstrations failed:\n  {}", failed.len(), failed.join("\n  "))]
+pub struct GenerateError {
+    pub failed: Vec<String>,
+    pub total: usize,
+}
+
 /// Generates the selected demonstrations (in parallel, deterministic for a seed).
 pub fn generate_dataset(
     world: &World,
@@ -31,7 +38,7 @@ pub fn generate_dataset(
     seed: u64,
     rate_hz: f64,
     progress: OnProgress<'_>,
-) -> anyhow::Result<Dataset> {
+) -> Result<Dataset, GenerateError> {
     let model = RobotModel::kmr_iiwa14();
     let mut cfg = GenConfig::new(MotionLimits::kmr_iiwa(&model));
     cfg.rate_hz = rate_hz;
@@ -43,7 +50,7 @@ pub fn generate_dataset(
         .map(|(i, a)| {
             let r = generator.generate(a, demo_seed(seed, i as u64));
             progress(Progress::Done(1));
-            r.map_err(|e| anyhow::anyhow!("demonstration {i} ({}): {e}", world.label(a)))
+            r.map_err(|e| format!("demonstration {i} ({}): {e}", world.label(a)))
         })
         .collect();
     let mut demonstrations = Vec::new();
@@ -55,16 +62,14 @@ pub fn generate_dataset(
                 task,
                 samples,
             }),
-            Err(e) => errors.push(e.to_string()),
+            Err(e) => errors.push(e),
         }
     }
     if !errors.is_empty() {
-        bail!(
-            "{} of {} demonstrations failed:\n  {}",
-            errors.len(),
-            selection.len(),
-            errors.join("\n  ")
-        );
+        return Err(GenerateError {
+            failed: errors,
+            total: selection.len(),
+        });
     }
     let instance = |id: &str, kind: &str| Instance {
         id: id.into(),

@@ -7,14 +7,14 @@
 use super::ik::{self, IkConfig, IkError};
 use super::rrt::{self, RrtConfig, RrtError, Space};
 use super::timing::{Limits, Motion};
-use crate::validate::{self, MotionLimits, wrap_angle as wrap};
+use crate::validate::{self, MotionLimits};
 use crate::world::geometry::{Cell, Obstacle};
 use crate::world::{AffordedTask, Planar, World, planar};
 use nalgebra::{Isometry3, Translation3};
 use prf_files::dataset::{Placed, Sample, TaskRecord};
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::nullspace::kernel;
-use prf_shared::se3::{Pose, pose_to_array};
+use prf_shared::se3::{Pose, pose_to_array, wrap};
 use prf_shared::{JointVector, NA};
 use rand::{SeedableRng, rngs::StdRng};
 

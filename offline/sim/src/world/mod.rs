@@ -10,7 +10,6 @@
 pub mod floorplan;
 pub mod geometry;
 
-use anyhow::{Context, bail};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use prf_files::line_of;
 use prf_shared::se3::{Pose, pose_from_xyz_rpy};
@@ -18,6 +17,35 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// The built-in example cell.
+/// Why a world file was refused; every message names the file, the line and the value.
+#[derive(Debug, thiserror::Error)]
+pub enum WorldError {
+    #[error("{path}: cannot read the world file")]
+    Read {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{file}:{line}:{column}: {source}")]
+    Json {
+        file: String,
+        line: usize,
+        column: usize,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The file parses but describes no valid cell (the message says where and why).
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Returns `WorldError::Invalid` with a formatted message.
+macro_rules! invalid {
+    ($($arg:tt)*) => {
+        return Err(WorldError::Invalid(format!($($arg)*)))
+    };
+}
+
 pub const EXAMPLE_WORLD: &str = include_str!("../../../data/example-world.json");
 /// Name shown for the built-in world in messages.
 pub const EXAMPLE_WORLD_NAME: &str = "<built-in example-world.json>";
@@ -200,23 +228,28 @@ impl World {
     }
 
     /// Reads and validates a world file.
-    pub fn load(path: &Path) -> anyhow::Result<World> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("{}: cannot read the world file", path.display()))?;
+    pub fn load(path: &Path) -> Result<World, WorldError> {
+        let text = std::fs::read_to_string(path).map_err(|source| WorldError::Read {
+            path: path.display().to_string(),
+            source,
+        })?;
         Self::parse(&text, path)
     }
 
     /// Parses and validates world JSON; errors name the file, the line and the value.
-    pub fn parse(text: &str, source: &Path) -> anyhow::Result<World> {
-        let mut world: World = serde_json::from_str(text).map_err(|e| {
-            anyhow::anyhow!("{}:{}:{}: {e}", source.display(), e.line(), e.column())
+    pub fn parse(text: &str, source: &Path) -> Result<World, WorldError> {
+        let mut world: World = serde_json::from_str(text).map_err(|e| WorldError::Json {
+            file: source.display().to_string(),
+            line: e.line(),
+            column: e.column(),
+            source: e,
         })?;
         world.source = source.to_path_buf();
         world.validate(text)?;
         Ok(world)
     }
 
-    fn validate(&self, text: &str) -> anyhow::Result<()> {
+    fn validate(&self, text: &str) -> Result<(), WorldError> {
         let at = |needle: &str| {
             format!(
                 "{}:{}",
@@ -225,14 +258,14 @@ impl World {
             )
         };
         if self.format != FORMAT {
-            bail!(
+            invalid!(
                 "{}: format {:?}, expected {FORMAT:?}",
                 at("\"format\""),
                 self.format
             );
         }
         if self.version != VERSION {
-            bail!(
+            invalid!(
                 "{}: version {}, this build reads {VERSION}",
                 at("\"version\""),
                 self.version
@@ -245,7 +278,7 @@ impl World {
             && c.self_collision >= 0.0
             && c.self_collision.is_finite();
         if !ordered {
-            bail!(
+            invalid!(
                 "{}: clearances must satisfy 0 < acceptable < demonstration and self >= 0, \
                  got demonstration {} acceptable {} self {}",
                 at("\"clearance\""),
@@ -276,7 +309,7 @@ impl World {
         for t in &self.location_types {
             let here = || at(&format!("\"{}\"", t.name));
             if t.approaches.is_empty() {
-                bail!("{}: location type {} has no approach", here(), t.name);
+                invalid!("{}: location type {} has no approach", here(), t.name);
             }
             unique(
                 t.approaches.iter().map(|a| a.name.as_str()),
@@ -288,7 +321,7 @@ impl World {
                 let line = || at(&format!("\"{}\"", b.name));
                 finite(&[b.min, b.max].concat(), line)?;
                 if (0..3).any(|k| b.min[k] >= b.max[k]) {
-                    bail!(
+                    invalid!(
                         "{}: box {} of {}: min {:?} is not below max {:?}",
                         line(),
                         b.name,
@@ -307,7 +340,7 @@ impl World {
         for p in &self.part_types {
             let here = || at(&format!("\"{}\"", p.name));
             if p.grasps.is_empty() {
-                bail!("{}: part type {} has no grasp", here(), p.name);
+                invalid!("{}: part type {} has no grasp", here(), p.name);
             }
             unique(p.grasps.iter().map(|g| g.name.as_str()), "grasp", &at)?;
             for g in &p.grasps {
@@ -318,7 +351,7 @@ impl World {
             let here = || at(&format!("\"{}\"", l.id));
             finite(&[l.x, l.y, l.yaw_deg], here)?;
             if self.location_type_index(&l.kind).is_none() {
-                bail!(
+                invalid!(
                     "{}: location {} has unknown type {:?}",
                     here(),
                     l.id,
@@ -328,7 +361,7 @@ impl World {
         }
         for p in &self.parts {
             if self.part_type_index(&p.kind).is_none() {
-                bail!(
+                invalid!(
                     "{}: part {} has unknown type {:?}",
                     at(&format!("\"{}\"", p.id)),
                     p.id,
@@ -442,9 +475,9 @@ impl World {
     }
 }
 
-fn finite(values: &[f64], at: impl Fn() -> String) -> anyhow::Result<()> {
+fn finite(values: &[f64], at: impl Fn() -> String) -> Result<(), WorldError> {
     if let Some(v) = values.iter().find(|v| !v.is_finite()) {
-        bail!("{}: non-finite value {v}", at());
+        invalid!("{}: non-finite value {v}", at());
     }
     Ok(())
 }
@@ -453,11 +486,11 @@ fn unique<'a>(
     names: impl Iterator<Item = &'a str>,
     what: &str,
     at: &dyn Fn(&str) -> String,
-) -> anyhow::Result<()> {
+) -> Result<(), WorldError> {
     let mut seen = std::collections::HashSet::new();
     for n in names {
         if !seen.insert(n) {
-            bail!("{}: duplicate {what} {n:?}", at(&format!("\"{n}\"")));
+            invalid!("{}: duplicate {what} {n:?}", at(&format!("\"{n}\"")));
         }
     }
     Ok(())
