@@ -4,14 +4,17 @@
 # its clippy, qemu-system-arm, binutils-arm-none-eabi for the linker).
 #
 #   scripts/firmware.sh build                       build; prints the ELF's path
-#   scripts/firmware.sh run CELL.BLOB TASK.BIN [--stream FILE]
+#   scripts/firmware.sh run CELL.BLOB TASK.BIN [--stream FILE] [--figures FILE]
 #                                                   flash the blob at 0x00300000 and the task
 #                                                   block (`prf plan … --task-block`) at
 #                                                   0x003F0000, run; --stream writes every
-#                                                   setpoint to FILE (prf_runtime::stream)
+#                                                   setpoint to FILE (prf_runtime::stream),
+#                                                   --figures the measured figures
+#                                                   (prf_runtime::figures)
 #   scripts/firmware.sh image CELL.BLOB TASK.BIN   build a self-contained image with both
 #                                                   linked in (feature embed); prints its path
-#   scripts/firmware.sh run-image ELF [--blob F] [--task F] [--stream FILE] [--fault-test]
+#   scripts/firmware.sh run-image ELF [--blob F] [--task F] [--stream FILE] [--figures FILE]
+#                                                   [--fault-test]
 #                                                   (--fault-test: executes an undefined
 #                                                   instruction, to show the HardFault exit)
 #   scripts/firmware.sh clippy                      clippy -D warnings on the firmware crate
@@ -53,6 +56,7 @@ qemu() {
   while [ $# -gt 0 ]; do
     case $1 in
       --stream) semi+=",arg=--stream,arg=$(abs "${2:?--stream needs a file}")"; shift 2 ;;
+      --figures) semi+=",arg=--figures,arg=$(abs "${2:?--figures needs a file}")"; shift 2 ;;
       --fault-test) semi+=",arg=--fault-test"; shift ;;
       --blob) loaders+=(-device "loader,file=$(abs "$2"),addr=0x00300000"); shift 2 ;;
       --task) loaders+=(-device "loader,file=$(abs "$2"),addr=0x003F0000"); shift 2 ;;

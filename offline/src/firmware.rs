@@ -1,11 +1,12 @@
 //! The cell-controller firmware seen from the host: build it and run it under QEMU with a blob
 //! and a task block (both through `scripts/firmware.sh`, the one home of the QEMU command
-//! line), read the figures it prints and the setpoint stream it writes, and compare that
-//! stream with the host runtime's for the same blob and task block.
+//! line), read the figures record and the setpoint stream it writes, and compare that stream
+//! with the host runtime's for the same blob and task block.
 
 use anyhow::{Context, bail};
 use prf_host::ideal::execute;
 use prf_runtime::executor::{ExecutorConfig, Mode, Setpoint};
+pub use prf_runtime::figures::Figures;
 use prf_runtime::stream::{RECORD_LEN, Record, decode};
 use prf_runtime::{Runtime, plan, task_block};
 use prf_sim::tasks::FloorTask;
@@ -61,72 +62,6 @@ pub fn build() -> anyhow::Result<PathBuf> {
     built_elf(&["build".as_ref()])
 }
 
-/// What the firmware printed, parsed.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Figures {
-    pub blob_bytes: u64,
-    pub load_instructions: u64,
-    pub feasible: bool,
-    pub integrations: u64,
-    pub planning_instructions: u64,
-    pub ticks: u64,
-    /// Executor ticks: max (and its sequence number), mean.
-    pub tick_max: u64,
-    pub tick_max_seq: u64,
-    pub tick_mean: u64,
-    /// Per mode (base, arm, gripper): (ticks, max, mean).
-    pub by_mode: [(u64, u64, u64); 3],
-    /// From the tick's due time to the end of its work (wake-up + executor + plant + record).
-    pub loop_max: u64,
-    pub lateness_max: u64,
-    pub overruns: u64,
-    pub crc32: u32,
-    pub ram_data: u64,
-    pub ram_bss: u64,
-    pub ram_stack: u64,
-    pub ram_total: u64,
-}
-
-/// The number after `key` in `line`.
-fn after<T: std::str::FromStr>(line: &str, key: &str) -> Option<T> {
-    let rest = &line[line.find(key)? + key.len()..];
-    let word = rest.split_whitespace().next()?;
-    word.trim_end_matches([';', ',', ')']).parse().ok()
-}
-
-impl Figures {
-    /// Parses the firmware's report; None if a line is missing.
-    pub fn parse(stdout: &str) -> Option<Figures> {
-        let line = |prefix: &str| stdout.lines().find(|l| l.starts_with(prefix));
-        let (blob, plan, ticks) = (line("blob ")?, line("plan ")?, line("ticks ")?);
-        let (stream, ram) = (line("stream ")?, line("ram ")?);
-        let mode = |name: &str| -> Option<(u64, u64, u64)> {
-            let l = line(&format!("  {name} ticks "))?;
-            Some((after(l, "ticks ")?, after(l, "max ")?, after(l, "mean ")?))
-        };
-        Some(Figures {
-            blob_bytes: after(blob, "blob ")?,
-            load_instructions: after(blob, "load ")?,
-            feasible: after(plan, "feasible ")?,
-            integrations: after(plan, "integrations ")?,
-            planning_instructions: after(plan, "instructions ")?,
-            ticks: after(ticks, "ticks ")?,
-            tick_max: after(ticks, "executor max ")?,
-            tick_max_seq: after(ticks, "(seq ")?,
-            tick_mean: after(ticks, ") mean ")?,
-            by_mode: [mode("base")?, mode("arm")?, mode("gripper")?],
-            loop_max: after(ticks, "loop max ")?,
-            lateness_max: after(ticks, "lateness max ")?,
-            overruns: after(ticks, "overruns ")?,
-            crc32: u32::from_str_radix(&after::<String>(stream, "crc32 ")?, 16).ok()?,
-            ram_data: after(ram, "data ")?,
-            ram_bss: after(ram, "bss ")?,
-            ram_stack: after(ram, "stack ")?,
-            ram_total: after(ram, "total ")?,
-        })
-    }
-}
-
 /// One run of the firmware under QEMU.
 #[derive(Debug)]
 pub struct Run {
@@ -139,24 +74,35 @@ pub struct Run {
 
 /// Runs `elf` under QEMU; `args` go to `scripts/firmware.sh run-image`: `--blob FILE` and
 /// `--task FILE` flash them into their regions, `--stream FILE` has every setpoint written
-/// there, `--fault-test` executes an undefined instruction.
+/// there, `--fault-test` executes an undefined instruction. The firmware's figures come back
+/// as a record in a file of their own (`--figures`).
 pub fn run<I, S>(elf: &Path, args: I) -> anyhow::Result<Run>
 where
     I: IntoIterator<Item = S>,
     S: AsRef<std::ffi::OsStr>,
 {
+    static RUNS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let figures_path =
+        std::env::temp_dir().join(format!("prf-firmware-figures-{}-{n}", std::process::id()));
+    let _ = std::fs::remove_file(&figures_path);
     let out = Command::new("bash")
         .arg(script())
         .arg("run-image")
         .arg(elf)
         .args(args)
+        .arg("--figures")
+        .arg(&figures_path)
         .output()
         .context("running scripts/firmware.sh run-image")?;
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    let figures = std::fs::read(&figures_path)
+        .ok()
+        .and_then(|b| Figures::decode(&b));
+    let _ = std::fs::remove_file(&figures_path);
     Ok(Run {
         status: out.status.code(),
-        figures: Figures::parse(&stdout),
-        stdout,
+        figures,
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
     })
 }
 
@@ -266,34 +212,32 @@ pub fn compare(host: &[Setpoint], firmware: &[Record]) -> Result<Comparison, Str
     Ok(c)
 }
 
-impl Figures {
-    /// The budgets this run exceeds (empty: within all): executor tick, planning, static RAM,
-    /// and no overrun of the 1 kHz tick.
-    pub fn violations(&self) -> Vec<String> {
-        let mut v = Vec::new();
-        if self.tick_max > MAX_TICK_INSTRUCTIONS {
-            v.push(format!(
-                "executor tick {} > {MAX_TICK_INSTRUCTIONS} instructions (seq {})",
-                self.tick_max, self.tick_max_seq
-            ));
-        }
-        if self.planning_instructions > MAX_PLANNING_INSTRUCTIONS {
-            v.push(format!(
-                "planning {} > {MAX_PLANNING_INSTRUCTIONS} instructions",
-                self.planning_instructions
-            ));
-        }
-        if self.ram_total > MAX_STATIC_RAM {
-            v.push(format!(
-                "static RAM {} > {MAX_STATIC_RAM} bytes",
-                self.ram_total
-            ));
-        }
-        if self.overruns > 0 {
-            v.push(format!("{} ticks overran 1 ms", self.overruns));
-        }
-        v
+/// The budgets a run exceeds (empty: within all): executor tick, planning, static RAM, and no
+/// overrun of the 1 kHz tick.
+pub fn violations(f: &Figures) -> Vec<String> {
+    let mut v = Vec::new();
+    if f.tick_max > MAX_TICK_INSTRUCTIONS {
+        v.push(format!(
+            "executor tick {} > {MAX_TICK_INSTRUCTIONS} instructions (seq {})",
+            f.tick_max, f.tick_max_seq
+        ));
     }
+    if f.planning_instructions > MAX_PLANNING_INSTRUCTIONS {
+        v.push(format!(
+            "planning {} > {MAX_PLANNING_INSTRUCTIONS} instructions",
+            f.planning_instructions
+        ));
+    }
+    if f.ram_total > MAX_STATIC_RAM {
+        v.push(format!(
+            "static RAM {} > {MAX_STATIC_RAM} bytes",
+            f.ram_total
+        ));
+    }
+    if f.overruns > 0 {
+        v.push(format!("{} ticks overran 1 ms", f.overruns));
+    }
+    v
 }
 
 /// One task on the firmware, checked against the host.
@@ -320,9 +264,8 @@ pub fn check_task(
         .collect();
     let block_path = dir.join(format!("{name}.task"));
     let stream_path = dir.join(format!("{name}.stream"));
-    let mut block = [0u8; 1024];
-    let n = task_block::encode(&task.task(), &mut block).map_err(|e| anyhow::anyhow!("{e}"))?;
-    std::fs::write(&block_path, &block[..n])
+    let block = task.task_block()?;
+    std::fs::write(&block_path, &block)
         .with_context(|| format!("writing {}", block_path.display()))?;
     let _ = std::fs::remove_file(&stream_path);
     let args = [
@@ -335,7 +278,7 @@ pub fn check_task(
     ];
     let run = run(elf, args)?;
     let bytes = std::fs::read(blob).with_context(|| format!("reading {}", blob.display()))?;
-    let host = host_stream(&bytes, &block[..n])?;
+    let host = host_stream(&bytes, &block)?;
     let comparison = match (run.status, read_stream(&stream_path)) {
         (Some(0), Ok(fw)) => compare(&host, &fw),
         (status, Ok(_)) => Err(format!("the firmware exited with {status:?}")),

@@ -33,11 +33,13 @@ pub struct ExecutorConfig {
     pub base_timeout: Duration,
     /// The platform has arrived within this distance, m, and yaw, rad.
     pub base_position_tolerance: f64,
+    /// The platform has arrived within this yaw, rad.
     pub base_yaw_tolerance: f64,
     /// Largest allowed |measured − previous setpoint| of any arm joint, rad.
     pub tracking_tolerance: f64,
     /// The gripper counts as closed at or above, open at or below these (0 open, 1 closed).
     pub gripper_closed: f64,
+    /// The gripper counts as open at or below this.
     pub gripper_open: f64,
 }
 
@@ -58,6 +60,7 @@ impl Default for ExecutorConfig {
 /// The measured state of the cell.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Measured {
+    /// Arm joints, rad.
     pub arm: [f64; NA],
     /// Platform [x, y, yaw] in the world.
     pub base: [f64; 3],
@@ -104,11 +107,15 @@ pub struct Setpoint {
     pub seq: u32,
     /// The tick's time.
     pub t: Instant,
+    /// Arm joint setpoint, rad.
     pub arm: [f64; NA],
+    /// Arm joint velocity, rad/s.
     pub arm_velocity: [f64; NA],
+    /// Close the gripper (else open it).
     pub close_gripper: bool,
     /// Platform goal [x, y, yaw] (world).
     pub base_goal: [f64; 3],
+    /// What the executor is doing.
     pub mode: Mode,
     /// Index of the program segment.
     pub segment: u8,
@@ -138,11 +145,14 @@ pub trait Plant {
 pub enum Fault {
     /// Segment `segment` waited longer than its timeout.
     Timeout {
+        /// Index of the segment.
         segment: u8,
     },
     /// Joint `joint` is `error` rad from the previous setpoint.
     Tracking {
+        /// The joint, 0-based.
         joint: u8,
+        /// Its distance from the setpoint, rad.
         error: f64,
     },
     /// The measured state has a non-finite value.
@@ -151,17 +161,24 @@ pub enum Fault {
     ClockBackwards,
     /// The RDMP of segment `segment` could not be stepped.
     Rdmp {
+        /// Index of the segment.
         segment: u8,
+        /// Why the step failed.
         error: RdmpError,
     },
+    /// The reversal of segment `segment` failed.
     Reverse {
+        /// Index of the segment.
         segment: u8,
+        /// Why the reversal failed.
         error: ReverseError,
     },
     /// Segment `segment` does not fit the program (a reversal without a forward motion).
     Program {
+        /// Index of the segment.
         segment: u8,
     },
+    /// The blob could not be read.
     Load(LoadError),
 }
 

@@ -9,6 +9,7 @@ use prf_shared::se3::Pose;
 
 /// Platform speed, m/s, and yaw rate, rad/s, of the ideal cell (KMR 200: 0.5 m/s).
 pub const BASE_SPEED: f64 = 0.5;
+/// Yaw rate of the ideal platform, rad/s.
 pub const BASE_YAW_RATE: f64 = 0.5;
 /// Gripper travel per second (full stroke in 0.5 s).
 pub const GRIPPER_RATE: f64 = 2.0;
@@ -16,6 +17,7 @@ pub const GRIPPER_RATE: f64 = 2.0;
 /// The state of the ideal cell.
 #[derive(Clone, Copy, Debug)]
 pub struct IdealCell {
+    /// The state the executor measures.
     pub measured: Measured,
     /// The tick, s.
     pub dt: f64,

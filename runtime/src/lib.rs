@@ -6,14 +6,16 @@
 //! - [`task_block`]: a task as bytes (for a controller that reads it from flash);
 //! - [`task_plan`]: forward search over the blob's action templates;
 //! - [`skill_plan`]: SkillPlan-PTT (Alg. 4), decomposed and pruned;
-//! - [`plan`]: all of the above in order, giving a [`plan::Plan`] and its [`program::Program`];
+//! - [`plan`](mod@plan): all of the above in order, giving a [`plan::Plan`] and its [`program::Program`];
 //! - [`executor`]: the 1 kHz state machine, with [`reverse`] for the reversed arm motions;
 //! - [`stream`]: a setpoint as a fixed-size record (firmware → host comparison);
+//! - [`figures`]: the firmware's measured figures as one record for the host;
 //! - [`ideal`]: an ideal cell (exact arm, fixed-rate gripper and platform) to run programs
 //!   against without hardware.
 #![no_std]
 
 pub mod executor;
+pub mod figures;
 pub mod ideal;
 pub mod load;
 pub mod plan;

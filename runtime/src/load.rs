@@ -15,7 +15,10 @@ pub enum LoadError {
     /// The blob itself is malformed (header, checksum, a record, a reference).
     Blob(BlobError),
     /// The blob declares more motion classes than the runtime has room for.
-    TooManyClasses { count: usize },
+    TooManyClasses {
+        /// Classes the blob declares.
+        count: usize,
+    },
 }
 
 impl From<BlobError> for LoadError {
@@ -66,8 +69,11 @@ impl Default for RuntimeConfig {
 /// A loaded knowledge base: the validated blob, its robot model and the code of each of its
 /// motion classes (looked up once by name).
 pub struct Runtime<'a> {
+    /// The validated blob.
     pub blob: Blob<'a>,
+    /// Its robot model.
     pub model: RobotModel,
+    /// Settings of planning and execution.
     pub config: RuntimeConfig,
     classes: heapless::Vec<&'static dyn MotionClass, MAX_CLASSES>,
 }

@@ -12,6 +12,7 @@ use prf_shared::se3::Pose;
 /// A planned task.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
+    /// The task's names resolved to blob indices.
     pub resolved: Resolved,
     /// The action plan (Move, Pick, Move, Place, Move).
     pub actions: ActionPlan,
@@ -32,8 +33,11 @@ pub enum PlanError<'t> {
     Infeasible(MissingList<'t>),
     /// The action templates cannot reach the goal state.
     NoActionPlan,
+    /// SkillPlan-PTT failed.
     Skill(SkillPlanError),
+    /// The chosen skills do not form a program.
     Program(ProgramError),
+    /// The blob could not be read.
     Load(LoadError),
 }
 

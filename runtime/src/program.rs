@@ -15,29 +15,49 @@ pub const MAX_SEGMENTS: usize = 24;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Segment {
     /// π_BaseMove: the platform drives itself to `goal` (world); the arm holds.
-    Base { goal: Pose },
+    Base {
+        /// Platform goal in the world.
+        goal: Pose,
+    },
     /// π_ArmRDMP: skill `skill`'s RDMP from the current arm configuration to `goal` (arm base
     /// frame), `steps` ticks.
-    Arm { skill: u16, goal: Pose, steps: u32 },
+    Arm {
+        /// Blob index of the skill.
+        skill: u16,
+        /// TCP goal in the arm base frame.
+        goal: Pose,
+        /// Ticks of the motion.
+        steps: u32,
+    },
     /// π_Grip: command the gripper and wait for it.
-    Grip { close: bool },
+    Grip {
+        /// Close (else open).
+        close: bool,
+    },
     /// ¬π_ArmRDMP: the preceding Arm segment backwards.
-    Reverse { steps: u32 },
+    Reverse {
+        /// Ticks of the motion.
+        steps: u32,
+    },
 }
 
 /// The parameters an action was realized with: its goal and, for RDMP generators, its skill.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Realization {
+    /// The goal the action was realized with.
     pub goal: Goal,
+    /// The skill (RDMP generators only).
     pub skill: Option<u16>,
 }
 
 /// Why a skill plan cannot be turned into a program.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ProgramError {
+    /// The blob could not be read.
     Load(LoadError),
     /// Action `action` lacks the goal kind or skill its generators need.
     Realization {
+        /// Index of the action in the plan.
         action: usize,
     },
     /// An arm motion is too long to be played backwards.
@@ -78,8 +98,10 @@ impl From<LoadError> for ProgramError {
     }
 }
 
+/// A program: the segments the executor runs, in order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Program {
+    /// The segments.
     pub segments: heapless::Vec<Segment, MAX_SEGMENTS>,
 }
 

@@ -47,6 +47,7 @@ struct Refill {
 }
 
 impl Reversal {
+    /// Empty working memory.
     pub const fn new() -> Self {
         Reversal {
             n: 0,
@@ -205,7 +206,10 @@ impl Default for Reversal {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ReverseError {
     /// The forward motion is longer than [`MAX_STEPS`].
-    TooLong { steps: usize },
+    TooLong {
+        /// Steps of the motion.
+        steps: usize,
+    },
     /// The forward motion was not recorded from its start.
     MissingCheckpoint,
     /// Re-integration failed (it cannot, for a motion that ran forward).

@@ -45,10 +45,15 @@ pub const MAX_GOALS: usize = 64;
 /// in the blob's affordance lists, and the blob indices of the pick and place skills.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Choice {
+    /// Stance at ℓ1.
     pub stance_from: u8,
+    /// Stance at ℓ2.
     pub stance_to: u8,
+    /// Grasp.
     pub grasp: u8,
+    /// Pick skill (blob index).
     pub pick_skill: u16,
+    /// Place skill (blob index).
     pub place_skill: u16,
 }
 
@@ -74,10 +79,13 @@ pub struct SkillPlan {
     pub choice: Option<Choice>,
     /// J* = max(r_Pick, r_Place) of the choice (∞ without a choice), m.
     pub j: f64,
+    /// Risk r_Pick of the chosen pick motion, m.
     pub r_pick: f64,
+    /// Risk r_Place of the chosen place motion, m.
     pub r_place: f64,
     /// J* ≤ the configured risk threshold.
     pub feasible: bool,
+    /// The work done.
     pub stats: PlanStats,
 }
 
@@ -85,9 +93,18 @@ pub struct SkillPlan {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Evaluation {
     /// Fully integrated: its risk (Eq. 16) and number of steps.
-    Risk { risk: f64, steps: usize },
+    Risk {
+        /// Risk (Eq. 16), m.
+        risk: f64,
+        /// Steps of the motion.
+        steps: usize,
+    },
     /// Stopped after `steps` because its running risk reached the bound.
-    Pruned { steps: usize },
+    /// Stopped early by the bound.
+    Pruned {
+        /// Steps taken before the stop.
+        steps: usize,
+    },
     /// The RDMP could not be integrated.
     Failed(RdmpError),
 }
@@ -95,6 +112,7 @@ pub enum Evaluation {
 /// Why planning stopped with an error.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SkillPlanError {
+    /// The blob could not be read.
     Load(LoadError),
     /// The action plan is not Move, Pick, Move, Place, Move.
     UnsupportedPlan,
@@ -197,10 +215,13 @@ pub fn evaluate_arm_motion(
 /// stance in the location frame, the arm-base-frame goal of each (stance, grasp), and the
 /// ordered skills.
 pub struct Side<'a> {
+    /// The side's workspace Ω+ as a distance field (location frame).
     pub field: Field<'a>,
+    /// Arm base of each stance, location frame.
     pub arm_bases: heapless::Vec<Pose, MAX_AFFORDANCES>,
     /// Goal of (stance s, grasp g) at s · grasps + g.
     pub goals: heapless::Vec<Pose, MAX_GOALS>,
+    /// Number of grasps.
     pub grasps: usize,
     /// World pose of the platform at each stance (the Move goal).
     pub platform: heapless::Vec<Pose, MAX_AFFORDANCES>,
@@ -326,12 +347,16 @@ fn class_skills(
 
 /// The blob class indices of Pick, Place and Move and their code.
 pub struct PttClasses {
+    /// Pick: blob class index and code.
     pub pick: (usize, &'static dyn MotionClass),
+    /// Place: blob class index and code.
     pub place: (usize, &'static dyn MotionClass),
+    /// Move: blob class index and code.
     pub moves: (usize, &'static dyn MotionClass),
 }
 
 impl PttClasses {
+    /// The three classes of a blob; None if it lacks one.
     pub fn of(rt: &Runtime<'_>) -> Option<Self> {
         let get = |name| {
             let i = rt.class_index(name)?;
@@ -381,12 +406,16 @@ fn context<'c>(
 
 /// The two sides of a PTT plan, with goals from the classes' Y, G and Φ_x.
 pub struct PttSides<'a> {
+    /// The pick side, at ℓ1.
     pub pick: Side<'a>,
+    /// The place side, at ℓ2.
     pub place: Side<'a>,
+    /// Number of grasps.
     pub grasps: usize,
 }
 
 impl<'a> PttSides<'a> {
+    /// Both sides of `task`, with goals from the classes' Y, G and Φ_x.
     pub fn new(
         rt: &Runtime<'a>,
         task: &Task<'_>,

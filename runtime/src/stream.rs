@@ -6,17 +6,23 @@
 use crate::executor::Setpoint;
 use prf_shared::NA;
 
+/// Bytes of one record.
 pub const RECORD_LEN: usize = 8 + 8 * NA + 8 * 3;
 
 /// The fields of a setpoint that a record carries.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Record {
+    /// Sequence number.
     pub seq: u32,
     /// [`crate::executor::Mode`] as u8.
     pub mode: u8,
+    /// Index of the program segment.
     pub segment: u8,
+    /// Close the gripper.
     pub close_gripper: bool,
+    /// Arm joint setpoint, rad.
     pub arm: [f64; NA],
+    /// Platform goal [x, y, yaw].
     pub base_goal: [f64; 3],
 }
 

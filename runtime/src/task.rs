@@ -7,8 +7,11 @@ use prf_shared::se3::Pose;
 /// An object of a task: instance id, type name, pose in the world.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Placed<'t> {
+    /// Instance id, e.g. CNC1.
     pub id: &'t str,
+    /// Its type, e.g. CNC.
     pub kind: &'t str,
+    /// Its pose in the world.
     pub pose: Pose,
 }
 
@@ -17,10 +20,15 @@ pub struct Placed<'t> {
 /// returns there.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Task<'t> {
+    /// The part, at its start pose.
     pub part: Placed<'t>,
+    /// The location it is at, ℓ1.
     pub from: Placed<'t>,
+    /// The location it goes to, ℓ2.
     pub to: Placed<'t>,
+    /// The part's goal pose T_p,g (world).
     pub goal: Pose,
+    /// The platform's home pose (world), ℓ0.
     pub home: Pose,
 }
 
@@ -65,8 +73,11 @@ pub type MissingList<'t> = heapless::Vec<Missing<'t>, 8>;
 /// A task resolved against the blob: type indices and the classes its plan uses.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolved {
+    /// Blob part type of the part.
     pub part_type: usize,
+    /// Blob location type of ℓ1.
     pub from_type: usize,
+    /// Blob location type of ℓ2.
     pub to_type: usize,
 }
 
@@ -74,7 +85,10 @@ pub struct Resolved {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TaskError {
     /// A pose has a non-finite component: `what` names it.
-    NonFinite { what: &'static str },
+    NonFinite {
+        /// Which pose.
+        what: &'static str,
+    },
     /// ℓ1 and ℓ2 are the same location instance.
     SameLocation,
 }

@@ -8,7 +8,9 @@ use prf_shared::blob::crc32;
 use prf_shared::se3::{pose_from_array, pose_to_array};
 use serde::{Deserialize, Serialize};
 
+/// Magic at the start of every task block.
 pub const MAGIC: [u8; 8] = *b"PRFTASK\0";
+/// Header bytes: magic (8), payload length (4), CRC-32 (4).
 pub const HEADER_LEN: usize = 16;
 
 /// Why a task block was refused.
@@ -16,8 +18,11 @@ pub const HEADER_LEN: usize = 16;
 pub enum TaskBlockError {
     /// No magic at the start: no block was written.
     Missing,
+    /// Shorter than its header says.
     Truncated,
+    /// The CRC-32 does not match.
     Checksum,
+    /// The payload does not decode.
     Decode,
     /// A pose is not finite or has a zero quaternion.
     Pose,
@@ -44,16 +49,24 @@ impl core::error::Error for TaskBlockError {}
 /// The serialized task: (id, type) names and poses as `[x, y, z, qw, qx, qy, qz]`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TaskRecord<'a> {
+    /// Part [id, type].
     #[serde(borrow)]
     pub part: [&'a str; 2],
+    /// Location ℓ1 [id, type].
     #[serde(borrow)]
     pub from: [&'a str; 2],
+    /// Location ℓ2 [id, type].
     #[serde(borrow)]
     pub to: [&'a str; 2],
+    /// Part start pose.
     pub part_pose: [f64; 7],
+    /// Pose of ℓ1.
     pub from_pose: [f64; 7],
+    /// Pose of ℓ2.
     pub to_pose: [f64; 7],
+    /// Part goal pose.
     pub goal: [f64; 7],
+    /// Platform home pose.
     pub home: [f64; 7],
 }
 

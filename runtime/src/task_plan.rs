@@ -9,7 +9,9 @@ use prf_shared::motion::symbolic::{ActionTemplate, Param, StateVar, Value};
 pub const LOCATIONS: usize = 3;
 /// Index of ℓ0, ℓ1, ℓ2 among the task's locations.
 pub const HOME: u8 = 0;
+/// Index of ℓ1.
 pub const FROM: u8 = 1;
+/// Index of ℓ2.
 pub const TO: u8 = 2;
 /// Parts a task names.
 pub const PARTS: usize = 1;
@@ -20,8 +22,11 @@ pub const MAX_ACTIONS: usize = 8;
 /// indices, by the template's parameter kinds).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Action {
+    /// Blob class index.
     pub class: u8,
+    /// Arguments (part or location indices).
     pub args: [u8; 3],
+    /// Number of arguments used.
     pub n_args: u8,
 }
 

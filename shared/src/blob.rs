@@ -16,9 +16,11 @@ use crate::se3::{Pose, pose_from_array};
 use nalgebra::{Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
+/// Magic at the start of every blob.
 pub const MAGIC: [u8; 8] = *b"PRFBLOB\0";
 /// Format version this build reads and writes.
 pub const VERSION: u32 = 2;
+/// Header bytes: magic (8), version (4), payload length (4), CRC-32 (4), reserved (4).
 pub const HEADER_LEN: usize = 24;
 /// Maximum affordances (stances of a location type, grasps of a part type).
 pub const MAX_AFFORDANCES: usize = 16;
@@ -30,41 +32,56 @@ pub const RDMP_COORDS: usize = 7;
 pub enum BlobError {
     /// Fewer bytes than the header, or than the header says.
     Truncated {
+        /// Bytes the header needs.
         needed: usize,
+        /// Bytes there are.
         got: usize,
     },
+    /// The blob does not start with [`MAGIC`].
     BadMagic,
     /// Written by a newer (or unknown) format version.
     Version {
+        /// Format version in the header.
         found: u32,
+        /// The version this build reads.
         supported: u32,
     },
     /// More bytes than the header says.
     TrailingBytes {
+        /// Payload length in the header.
         declared: usize,
+        /// Payload bytes present.
         got: usize,
     },
     /// The payload's CRC-32 differs from the header's.
     Checksum {
+        /// CRC-32 in the header.
         expected: u32,
+        /// CRC-32 of the payload.
         found: u32,
     },
     /// The payload or a record does not decode.
     Decode {
+        /// The section of the record.
         section: Section,
+        /// Index of the record in its section.
         index: usize,
     },
     /// The robot model is invalid.
     Model(ModelError),
     /// A workspace field is malformed.
     Field {
+        /// Index of the location type.
         location_type: usize,
+        /// What is wrong with its workspace.
         error: FieldError,
     },
     /// A skill names a class, RDMP, location or part type that does not exist, or an
     /// affordance pose is not a unit-quaternion pose.
     Reference {
+        /// The section of the record.
         section: Section,
+        /// Index of the record in its section.
         index: usize,
     },
 }
@@ -107,46 +124,28 @@ impl core::error::Error for BlobError {}
 /// Sections of the payload, for error reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Section {
+    /// The payload as a whole.
     Payload,
+    /// The motion classes.
     Classes,
+    /// The location types (stances, workspaces).
     LocationTypes,
+    /// The part types (grasps).
     PartTypes,
+    /// The RDMP skills.
     Rdmps,
+    /// The skill table.
     Skills,
 }
 
-/// CRC-32 (IEEE 802.3, reflected, init and final xor 0xFFFFFFFF).
-pub fn crc32(data: &[u8]) -> u32 {
-    crc32_update(0, data)
-}
+/// CRC-32/ISO-HDLC (IEEE 802.3: reflected, init and final xor 0xFFFFFFFF), the checksum of
+/// blobs, task blocks and setpoint streams. A stream is checksummed piece by piece with
+/// `CRC32.digest()`, `update`, `finalize`.
+pub static CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
-/// The CRC-32 of a ‖ `data`, given `crc` = the CRC-32 of a (0 for the empty a), so a stream
-/// can be checksummed piece by piece.
-pub fn crc32_update(crc: u32, data: &[u8]) -> u32 {
-    const TABLE: [u32; 256] = {
-        let mut t = [0u32; 256];
-        let mut i = 0;
-        while i < 256 {
-            let mut c = i as u32;
-            let mut k = 0;
-            while k < 8 {
-                c = if c & 1 != 0 {
-                    0xEDB8_8320 ^ (c >> 1)
-                } else {
-                    c >> 1
-                };
-                k += 1;
-            }
-            t[i] = c;
-            i += 1;
-        }
-        t
-    };
-    let mut c = !crc;
-    for &b in data {
-        c = TABLE[((c ^ b as u32) & 0xFF) as usize] ^ (c >> 8);
-    }
-    !c
+/// The CRC-32 of `data`.
+pub fn crc32(data: &[u8]) -> u32 {
+    CRC32.checksum(data)
 }
 
 /// The header for a payload.
@@ -162,17 +161,21 @@ pub fn header(payload: &[u8]) -> [u8; HEADER_LEN] {
 /// A list of postcard records: `offsets` holds one u32 (LE) start per record into `data`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Table<'a> {
+    /// Little-endian u32 offset of each record in `data`.
     #[serde(borrow)]
     pub offsets: &'a [u8],
+    /// The records, postcard-encoded, back to back.
     #[serde(borrow)]
     pub data: &'a [u8],
 }
 
 impl<'a> Table<'a> {
+    /// Number of records.
     pub fn len(&self) -> usize {
         self.offsets.len() / 4
     }
 
+    /// True when the table has no record.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -202,34 +205,52 @@ impl<'a> Table<'a> {
 /// A revolute joint: origin pose [x, y, z, qw, qx, qy, qz], axis, limits (rad, rad/s).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct JointData {
+    /// Joint frame in the parent link frame, [x, y, z, qw, qx, qy, qz].
     pub origin: [f64; 7],
+    /// Rotation axis in the joint frame.
     pub axis: [f64; 3],
+    /// Lower position limit, rad.
     pub lower: f64,
+    /// Upper position limit, rad.
     pub upper: f64,
+    /// Speed limit, rad/s.
     pub max_speed: f64,
 }
 
+/// A collision sphere as stored.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SphereData {
+    /// Frame index: 0 arm base, 1–7 links, 8 flange.
     pub link: u8,
+    /// Centre in the link frame, m.
     pub centre: [f64; 3],
+    /// Radius, m.
     pub radius: f64,
 }
 
 /// The robot model as compiled from URDF + sphere file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RobotData {
+    /// Arm base in the platform frame, [x, y, z, qw, qx, qy, qz].
     pub mount: [f64; 7],
+    /// The seven arm joints.
     pub joints: [JointData; NA],
+    /// Flange in the frame of link 7.
     pub flange: [f64; 7],
+    /// TCP in the flange frame.
     pub tcp: [f64; 7],
+    /// Collision spheres.
     pub spheres: heapless::Vec<SphereData, MAX_SPHERES>,
+    /// Platform box centre in the base frame, m.
     pub platform_centre: [f64; 3],
+    /// Platform box half extents, m.
     pub platform_half: [f64; 3],
+    /// Home configuration q_a,H, rad.
     pub home: [f64; NA],
 }
 
 impl RobotData {
+    /// The record of a robot model.
     pub fn from_model(m: &RobotModel) -> Self {
         use crate::se3::pose_to_array as arr;
         RobotData {
@@ -311,15 +332,20 @@ impl RobotData {
 /// provides segment, π, Y, G, Φ_x) and its action template.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ClassData<'a> {
+    /// Class name (Pick, Place, Move).
     pub name: &'a str,
+    /// Its action template α (head, parameters, pre, eff).
     pub action: ActionTemplate,
 }
 
 /// A location type: its stances T_b^ℓ and its workspace Ω+ (if any was learned).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LocationTypeData<'a> {
+    /// Location type name.
     pub name: &'a str,
+    /// Learned stances T_b^ℓ, location frame, [x, y, z, qw, qx, qy, qz].
     pub stances: heapless::Vec<[f64; 7], MAX_AFFORDANCES>,
+    /// The workspace Ω+ as a distance field (None: never demonstrated).
     #[serde(borrow)]
     pub workspace: Option<FieldData<'a>>,
 }
@@ -327,7 +353,9 @@ pub struct LocationTypeData<'a> {
 /// A part type and its grasps T_e^p.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PartTypeData<'a> {
+    /// Part type name.
     pub name: &'a str,
+    /// Learned grasps T_e^p, part frame, [x, y, z, qw, qx, qy, qz].
     pub grasps: heapless::Vec<[f64; 7], MAX_AFFORDANCES>,
 }
 
@@ -335,19 +363,28 @@ pub struct PartTypeData<'a> {
 /// as f32 (little endian, [`RDMP_COORDS`] × n_basis: position x y z, rotation x y z, γ).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RdmpData<'a> {
+    /// Number of Gaussian bases n_g.
     pub n_basis: u8,
+    /// Spring gain α_z (Eq. 4).
     pub alpha_z: f64,
+    /// Damper gain β_z (Eq. 4).
     pub beta_z: f64,
+    /// Phase decay α_ζ (Eq. 5).
     pub alpha_zeta: f64,
+    /// Smallest amplitude the forcing term is scaled by.
     pub min_amplitude: f64,
+    /// Duration τ of the demonstration, s.
     pub tau: f64,
     /// Bit c set: coordinate c's forcing term is scaled by its amplitude (Eq. 3).
     pub scaled: u8,
+    /// Demonstrated travel of the position DMP (goal − start), m.
     pub travel: [f64; 3],
+    /// γ at the goal (the null-space coordinate, Alg. 1).
     pub gamma_goal: f64,
     /// The demonstrated TCP goal (arm base frame, [x, y, z, qw, qx, qy, qz]): the planner
     /// tries skills whose demonstrated goal is nearest a new goal first.
     pub goal: [f64; 7],
+    /// Forcing weights, f32 little-endian, coordinate by coordinate.
     #[serde(borrow)]
     pub weights: &'a [u8],
 }
@@ -463,30 +500,44 @@ impl<'a> RdmpData<'a> {
 /// marks a copy made by share().
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SkillData<'a> {
+    /// Index of the skill's motion class.
     pub class: u8,
+    /// Index of its RDMP (None: a fixed generator such as BaseMove).
     pub rdmp: Option<u16>,
+    /// Location type it was learned at.
     pub location_type: Option<u8>,
+    /// Part type it was learned with.
     pub part_type: Option<u8>,
+    /// Id of the demonstration it came from.
     pub demo: &'a str,
+    /// Added by share() from another class.
     pub shared: bool,
 }
 
 /// The payload.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Payload<'a> {
+    /// Free text about the cell (from the dataset).
     pub description: &'a str,
     /// Clearances the workspaces were learned with: demonstrations r_d and acceptable r, m.
     pub clearance_demo: f64,
+    /// Acceptable clearance r, m.
     pub clearance_acceptable: f64,
+    /// The robot model.
     pub robot: RobotData,
+    /// Motion classes ([`ClassData`]).
     #[serde(borrow)]
     pub classes: Table<'a>,
+    /// Location types ([`LocationTypeData`]).
     #[serde(borrow)]
     pub location_types: Table<'a>,
+    /// Part types ([`PartTypeData`]).
     #[serde(borrow)]
     pub part_types: Table<'a>,
+    /// RDMP skills ([`RdmpData`]).
     #[serde(borrow)]
     pub rdmps: Table<'a>,
+    /// Skill table ([`SkillData`]).
     #[serde(borrow)]
     pub skills: Table<'a>,
 }
@@ -494,6 +545,7 @@ pub struct Payload<'a> {
 /// A validated blob: every record decodes, every reference resolves, every field is valid.
 #[derive(Clone, Debug)]
 pub struct Blob<'a> {
+    /// The validated payload; records decode on access.
     pub payload: Payload<'a>,
 }
 
@@ -525,6 +577,7 @@ impl<'a> Blob<'a> {
         Ok(HEADER_LEN.saturating_add(u32_at(12) as usize))
     }
 
+    /// Validates header, version, length, CRC-32 and every record; borrows `bytes`.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, BlobError> {
         let total = Self::stored_len(bytes)?;
         let u32_at =
@@ -604,18 +657,22 @@ impl<'a> Blob<'a> {
         Ok(())
     }
 
+    /// The robot model.
     pub fn robot(&self) -> Result<RobotModel, BlobError> {
         self.payload.robot.to_model()
     }
 
+    /// Motion class `i`.
     pub fn class(&self, i: usize) -> Result<ClassData<'a>, BlobError> {
         self.payload.classes.get(i, Section::Classes)
     }
 
+    /// Location type `i`.
     pub fn location_type(&self, i: usize) -> Result<LocationTypeData<'a>, BlobError> {
         self.payload.location_types.get(i, Section::LocationTypes)
     }
 
+    /// Part type `i`.
     pub fn part_type(&self, i: usize) -> Result<PartTypeData<'a>, BlobError> {
         self.payload.part_types.get(i, Section::PartTypes)
     }
@@ -649,6 +706,7 @@ impl<'a> Blob<'a> {
         }
     }
 
+    /// Skill `i`.
     pub fn skill(&self, i: usize) -> Result<SkillData<'a>, BlobError> {
         self.payload.skills.get(i, Section::Skills)
     }
@@ -686,7 +744,34 @@ mod tests {
     fn crc32_matches_the_check_value_whole_and_piecewise() {
         // The check value of CRC-32/ISO-HDLC.
         assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
-        let piecewise = crc32_update(crc32_update(crc32(b"1234"), b""), b"56789");
+        let mut digest = CRC32.digest();
+        for piece in [&b"1234"[..], b"", b"56789"] {
+            digest.update(piece);
+        }
+        let piecewise = digest.finalize();
         assert_eq!(piecewise, 0xCBF4_3926);
+    }
+
+    /// Against a bit-by-bit reference of the polynomial, on bytes of every value and length.
+    #[test]
+    fn crc32_matches_a_bitwise_reference() {
+        fn bitwise(data: &[u8]) -> u32 {
+            let mut c = 0xFFFF_FFFFu32;
+            for &b in data {
+                c ^= b as u32;
+                for _ in 0..8 {
+                    c = if c & 1 != 0 {
+                        (c >> 1) ^ 0xEDB8_8320
+                    } else {
+                        c >> 1
+                    };
+                }
+            }
+            !c
+        }
+        let data: [u8; 600] = core::array::from_fn(|i| (i * 7 + i / 256) as u8);
+        for n in [0, 1, 2, 3, 255, 256, 257, 600] {
+            assert_eq!(crc32(&data[..n]), bitwise(&data[..n]), "{n} bytes");
+        }
     }
 }

@@ -41,6 +41,7 @@ pub const CERT_BYTES: usize = 12;
 /// A conservative signed distance field: never below the true signed distance (negative
 /// inside the set).
 pub trait DistanceField {
+    /// Signed distance of `p`, m, never below the true one.
     fn distance(&self, p: &Vector3<f64>) -> f64;
 
     /// The distance at `p` if it is above `stop`; otherwise any upper bound of it that is at
@@ -90,7 +91,10 @@ pub enum FieldError {
     /// Byte array of the wrong length.
     Length,
     /// A brick map entry points past the stored bricks.
-    BrickIndex { brick: usize },
+    BrickIndex {
+        /// Index of the brick map entry.
+        brick: usize,
+    },
     /// Certificate balls not sorted by cell, or a cell outside the grid.
     Certificates,
 }

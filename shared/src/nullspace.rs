@@ -28,6 +28,7 @@ pub struct Kernel {
     /// Unit vector spanning ker J, oriented as the generalized cross product (zero if J is
     /// rank deficient).
     pub direction: JointVector,
+    /// Manipulability √det(J Jᵀ).
     pub manipulability: f64,
 }
 
@@ -44,6 +45,7 @@ pub struct JacobianQr {
 }
 
 impl JacobianQr {
+    /// The QR of Jᵀ.
     pub fn new(j: &Jacobian) -> Self {
         // a = Jᵀ, column-major by construction: a[c][row] is Jᵀ(row, c) = J(c, row).
         let mut a = [[0.0; 7]; 6];

@@ -97,25 +97,34 @@ impl Default for RdmpConfig {
 /// Why an RDMP could not be trained or integrated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RdmpError {
+    /// The underlying DMP failed.
     Dmp(DmpError),
     /// Demonstration sample `sample` is too close to a singularity for a null space.
     SingularDemonstration {
+        /// The sample index.
         sample: usize,
+        /// Manipulability there.
         manipulability: f64,
     },
     /// Integration reached a near-singular configuration at step `step`.
     Singular {
+        /// The step index.
         step: usize,
+        /// Manipulability there.
         manipulability: f64,
     },
     /// Integration would leave the position limits of `joint` at step `step`.
     JointLimit {
+        /// The step index.
         step: usize,
+        /// The joint, 0-based.
         joint: usize,
+        /// The value it would take, rad.
         value: f64,
     },
     /// A non-finite value appeared (input or integration) at step/sample `step`.
     NonFinite {
+        /// The step or sample index.
         step: usize,
     },
     /// Buffers of different lengths were passed where equal lengths are needed.
@@ -269,11 +278,13 @@ impl Rdmp {
 pub struct RdmpStep {
     /// Step index k of `q` (time kΔt).
     pub step: usize,
+    /// Joint setpoint at step k.
     pub q: JointVector,
     /// Joint velocity that led from step k−1 to k.
     pub qd: JointVector,
     /// γ of the DMP at step k−1 and as measured along the path up to k−1.
     pub gamma_dmp: f64,
+    /// γ measured along the path up to k−1.
     pub gamma_measured: f64,
     /// Manipulability at step k−1.
     pub manipulability: f64,
@@ -403,6 +414,7 @@ impl RdmpRun {
         (self.phase.step, self.phase.n_steps)
     }
 
+    /// True once the last step was taken.
     pub fn finished(&self) -> bool {
         self.phase.finished()
     }

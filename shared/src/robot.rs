@@ -23,13 +23,22 @@ pub const N_FRAMES: usize = NA + 2;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ModelError {
     /// Non-finite origin or axis, lower ≥ upper, or a non-positive speed limit.
-    Joint { joint: usize },
+    Joint {
+        /// The joint, 0-based.
+        joint: usize,
+    },
     /// Non-finite mount, flange or TCP transform.
     Transform,
     /// Sphere `index` names a frame that does not exist or has a bad centre or radius.
-    Sphere { index: usize },
+    Sphere {
+        /// The sphere's index.
+        index: usize,
+    },
     /// The home configuration is outside the limits of `joint`.
-    Home { joint: usize },
+    Home {
+        /// The joint, 0-based.
+        joint: usize,
+    },
 }
 
 impl core::fmt::Display for ModelError {
@@ -65,6 +74,7 @@ pub struct Joint {
     pub axis: Unit<Vector3<f64>>,
     /// Position limits, rad.
     pub lower: f64,
+    /// Upper position limit, rad.
     pub upper: f64,
     /// Speed limit, rad/s.
     pub max_speed: f64,
@@ -84,7 +94,9 @@ pub struct Sphere {
 /// The mobile platform's body as an axis-aligned box in the base frame `b`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlatformBox {
+    /// Box centre in the base frame, m.
     pub centre: Vector3<f64>,
+    /// Box half extents, m.
     pub half_extents: Vector3<f64>,
 }
 
@@ -93,6 +105,7 @@ pub struct PlatformBox {
 pub struct RobotModel {
     /// Arm base (URDF `link_0`) in the platform base frame `b`.
     pub mount: Pose,
+    /// The seven arm joints, base to flange.
     pub joints: [Joint; NA],
     /// Flange in the frame of link 7.
     pub flange: Pose,
@@ -101,6 +114,7 @@ pub struct RobotModel {
     /// Conservative collision geometry: every point of the real link surface lies inside the
     /// union of the spheres of its link. Sphere centres are the risk control points.
     pub spheres: heapless::Vec<Sphere, MAX_SPHERES>,
+    /// The platform body.
     pub platform: PlatformBox,
     /// Home configuration q_a,H of the arm.
     pub home: [f64; NA],

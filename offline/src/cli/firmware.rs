@@ -102,7 +102,7 @@ fn print_row(r: &TaskReport) -> bool {
         );
         return false;
     };
-    let violations = f.violations();
+    let violations = firmware::violations(f);
     let (diff, verdict) = match &r.comparison {
         Ok(c) if violations.is_empty() => (format!("{:.2e}", c.arm), "ok".to_string()),
         Ok(c) => (format!("{:.2e}", c.arm), violations.join("; ")),
@@ -115,7 +115,7 @@ fn print_row(r: &TaskReport) -> bool {
         f.planning_instructions as f64 / 1e6,
         f.tick_max,
         f.tick_mean,
-        f.by_mode[1].2,
+        f.by_mode[1].mean,
         f.ram_total as f64 / 1024.0,
         format!("{:08x}", f.crc32),
         diff,

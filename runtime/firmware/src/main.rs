@@ -7,7 +7,8 @@
 //! `qemu-system-arm -icount shift=0` SysTick counts are instruction counts), static RAM
 //! (data + bss + the stack's high-water mark) and a digest of the setpoint stream (CRC-32 of
 //! its records, every 1000th setpoint); with `--stream FILE` on the semihosting command line
-//! it writes every setpoint as a [`prf_runtime::stream`] record to FILE on the host. It exits
+//! it writes every setpoint as a [`prf_runtime::stream`] record to FILE on the host, with
+//! `--figures FILE` the figures as one [`prf_runtime::figures`] record. It exits
 //! with a status ([`fault::Exit`]); every exception and panic exits with a message.
 #![no_std]
 #![no_main]
@@ -29,12 +30,13 @@ use embassy_time::{Duration, Instant};
 use fault::{Exit, exit};
 use measure::Stack;
 use prf_runtime::executor::{Executor, ExecutorConfig, Mode};
+use prf_runtime::figures::{self, Figures, ModeFigures};
 use prf_runtime::ideal::IdealCell;
 use prf_runtime::program::Program;
 use prf_runtime::reverse::Reversal;
 use prf_runtime::stream::{self, RECORD_LEN};
 use prf_runtime::{Runtime, Task, plan};
-use prf_shared::blob::{Blob, crc32_update};
+use prf_shared::blob::{Blob, CRC32};
 use semihost::HostFile;
 use time_driver::{COUNTS_PER_PERIOD, counts};
 
@@ -66,10 +68,20 @@ fn main() -> ! {
         // Proves the exception path: an undefined instruction, escalated to HardFault.
         cortex_m::asm::udf();
     }
-    let (rt, task, program) = load_and_plan(k);
-    let status = execute(&rt, &task, program, k, semihost::option(cmdline, "stream"));
+    let mut figures = Figures::default();
+    let (rt, task, program) = load_and_plan(k, &mut figures);
+    let status = execute(
+        &rt,
+        &task,
+        program,
+        k,
+        semihost::option(cmdline, "stream"),
+        &mut figures,
+    );
     let (data, bss) = measure::static_ram();
     let stack = stack.high_water_mark();
+    (figures.ram_data, figures.ram_bss) = (data as u64, bss as u64);
+    (figures.ram_stack, figures.ram_total) = (stack as u64, (data + bss + stack) as u64);
     hprintln!(
         "ram data {} bss {} stack {} total {} bytes",
         data,
@@ -77,12 +89,28 @@ fn main() -> ! {
         stack,
         data + bss + stack
     );
-    exit(status)
+    match semihost::option(cmdline, "figures") {
+        Some(path) if !write_figures(path, &figures) => exit(Exit::Output),
+        _ => exit(status),
+    }
+}
+
+/// Writes the figures record to `path` on the host; false if that failed.
+fn write_figures(path: &str, figures: &Figures) -> bool {
+    let mut buf = [0u8; figures::MAX_LEN];
+    let written = match (figures.encode(&mut buf), HostFile::create(path)) {
+        (Some(bytes), Some(mut f)) => f.write_all(bytes),
+        _ => false,
+    };
+    if !written {
+        hprintln!("prf-firmware: writing the figures to {} failed", path);
+    }
+    written
 }
 
 /// Loads the blob and the task block from flash and plans the task; exits on any error.
 #[inline(never)]
-fn load_and_plan(k: u64) -> (Runtime<'static>, Task<'static>, Program) {
+fn load_and_plan(k: u64, figures: &mut Figures) -> (Runtime<'static>, Task<'static>, Program) {
     let blob = region(&raw const _blob_start, &raw const _blob_end);
     let Some(bytes) = Blob::stored_len(blob).ok().and_then(|n| blob.get(..n)) else {
         hprintln!(
@@ -105,6 +133,7 @@ fn load_and_plan(k: u64) -> (Runtime<'static>, Task<'static>, Program) {
         }
     };
     let load = counts() - t0;
+    (figures.blob_bytes, figures.load_instructions) = (bytes.len() as u64, load * k);
     hprintln!(
         "blob {} B valid; load {} instructions",
         bytes.len(),
@@ -133,12 +162,15 @@ fn load_and_plan(k: u64) -> (Runtime<'static>, Task<'static>, Program) {
             exit(Exit::Plan);
         }
     };
+    figures.feasible = p.skills.feasible;
+    figures.integrations = p.skills.stats.integrations as u64;
+    figures.planning_instructions = (counts() - t1) * k;
     hprintln!(
         "plan J* {:.6e} feasible {} integrations {} instructions {}",
         p.skills.j,
-        p.skills.feasible,
-        p.skills.stats.integrations,
-        (counts() - t1) * k
+        figures.feasible,
+        figures.integrations,
+        figures.planning_instructions
     );
     let Some(program) = p.program else {
         hprintln!("prf-firmware: the task has no program");
@@ -158,6 +190,7 @@ fn execute(
     program: Program,
     k: u64,
     stream_path: Option<&str>,
+    figures: &mut Figures,
 ) -> Exit {
     let mut file = match stream_path.map(|p| (p, HostFile::create(p))) {
         Some((p, None)) => {
@@ -185,7 +218,7 @@ fn execute(
     let mut worst = (0u64, 0u32, Mode::Base);
     // Per mode (Base, Arm, Gripper, Done, Fault): ticks, max, sum.
     let mut by_mode = [(0u64, 0u64, 0u64); 5];
-    let mut crc = 0;
+    let mut crc = CRC32.digest();
     let (mut ticker, mut due) = time_driver::aligned_ticker(period);
     let sp = loop {
         block_on(ticker.next());
@@ -194,7 +227,7 @@ fn execute(
         let Ok(sp) = ex.step(t, &mut cell);
         let used = counts() - woke;
         let record = stream::encode(&sp);
-        crc = crc32_update(crc, &record);
+        crc.update(&record);
         let work = counts().saturating_sub(due);
         busy = busy.max(work);
         misses += (work >= COUNTS_PER_PERIOD as u64) as u64;
@@ -236,6 +269,19 @@ fn execute(
     };
     let ticks: u64 = by_mode.iter().map(|m| m.0).sum();
     let sum: u64 = by_mode.iter().map(|m| m.2).sum();
+    figures.ticks = ticks;
+    (figures.tick_max, figures.tick_max_seq) = (worst.0 * k, worst.1 as u64);
+    figures.tick_mean = sum * k / ticks.max(1);
+    (figures.loop_max, figures.lateness_max) = (busy * k, late * k);
+    figures.overruns = misses;
+    for (f, (n, max, sum)) in figures.by_mode.iter_mut().zip(by_mode) {
+        *f = ModeFigures {
+            ticks: n,
+            max: max * k,
+            mean: sum * k / n.max(1),
+        };
+    }
+    figures.crc32 = crc.finalize();
     hprintln!(
         "ticks {} executor max {} (seq {} {:?}) mean {} instructions; loop max {} wake-up lateness max {} instructions; overruns {}",
         ticks,
@@ -256,7 +302,7 @@ fn execute(
             sum * k / n.max(1)
         );
     }
-    hprintln!("stream {} setpoints crc32 {:08x}", ticks, crc);
+    hprintln!("stream {} setpoints crc32 {:08x}", ticks, figures.crc32);
     match ex.fault() {
         Some(f) => {
             hprintln!("prf-firmware: the executor stopped: {}", f);

@@ -63,13 +63,24 @@ pub enum DmpError {
     /// Parameters out of range (n_basis, gains, time step).
     BadParams,
     /// A demonstration needs at least this many samples.
-    TooFewSamples { got: usize, need: usize },
+    TooFewSamples {
+        /// Samples given.
+        got: usize,
+        /// Samples needed.
+        need: usize,
+    },
     /// A demonstration sample or an integration input is NaN or infinite.
-    NonFinite { sample: usize },
+    NonFinite {
+        /// The sample index.
+        sample: usize,
+    },
     /// The weight regression is singular even after regularisation.
     IllConditioned,
     /// An output buffer is shorter than the trajectory (`need` samples).
-    BufferTooSmall { need: usize },
+    BufferTooSmall {
+        /// Samples the trajectory has.
+        need: usize,
+    },
 }
 
 impl core::fmt::Display for DmpError {

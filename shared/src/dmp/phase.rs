@@ -14,8 +14,11 @@ const NEGLIGIBLE_EXPONENT: f64 = 36.0;
 /// Centres and widths of the n_g Gaussian bases.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Basis {
+    /// Number of bases n_g.
     pub n: usize,
+    /// Centres c_i in phase.
     pub centres: [f64; MAX_BASES],
+    /// Widths h_i.
     pub widths: [f64; MAX_BASES],
 }
 
@@ -23,12 +26,16 @@ pub struct Basis {
 /// `first..last`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Features {
+    /// φ_i, zero outside `first..last`.
     pub values: [f64; MAX_BASES],
+    /// First non-zero basis.
     pub first: usize,
+    /// One past the last non-zero basis.
     pub last: usize,
 }
 
 impl Basis {
+    /// The bases of `p`, centres spread evenly in time.
     pub fn new(p: &DmpParams) -> Result<Self, DmpError> {
         let positive = |x: f64| x > 0.0 && x.is_finite();
         let valid = (2..=MAX_BASES).contains(&p.n_basis)
@@ -91,6 +98,7 @@ impl Basis {
 /// Phase of one integration: ζ and the features at the current and the next step.
 #[derive(Clone, Copy, Debug)]
 pub struct Phase {
+    /// The Gaussian bases.
     pub basis: Basis,
     /// Step index k (time kΔt).
     pub step: usize,
@@ -99,6 +107,7 @@ pub struct Phase {
     decay: f64,
     /// ζ_k and ζ_{k+1}.
     pub zeta: f64,
+    /// ζ_{k+1}.
     pub zeta_next: f64,
     /// φ(ζ_k).
     pub current: Features,

@@ -8,18 +8,22 @@ use nalgebra::SVector;
 /// A trained N-dimensional position DMP.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PositionDmp<const N: usize> {
+    /// Gains, bases and duration.
     pub params: DmpParams,
     /// Demonstrated duration τ, s.
     pub tau: f64,
+    /// The learned forcing term.
     pub forcing: Forcing<N>,
 }
 
 /// State of a position DMP during integration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PositionState<const N: usize> {
+    /// Position y.
     pub y: SVector<f64, N>,
     /// Scaled velocity z = τẏ.
     pub z: SVector<f64, N>,
+    /// Goal g.
     pub goal: SVector<f64, N>,
     /// D = g − y0 of this integration (Eq. 3).
     pub amplitude: SVector<f64, N>,
@@ -94,6 +98,7 @@ impl<const N: usize> PositionDmp<N> {
 }
 
 impl<const N: usize> PositionState<N> {
+    /// At rest at `y0`, heading for `goal`.
     pub fn new(y0: &SVector<f64, N>, goal: &SVector<f64, N>) -> Self {
         PositionState {
             y: *y0,

@@ -15,9 +15,11 @@ use nalgebra::Vector3;
 /// A trained rotation DMP.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotationDmp {
+    /// Gains, bases and duration.
     pub params: DmpParams,
     /// Demonstrated duration τ, s.
     pub tau: f64,
+    /// The learned forcing term.
     pub forcing: Forcing<3>,
     /// Demonstrated initial goal error e(0), unwrapped: its norm is the total rotation travel.
     pub travel: Vector3<f64>,
@@ -26,9 +28,11 @@ pub struct RotationDmp {
 /// State of a rotation DMP during integration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotationState {
+    /// Orientation R.
     pub r: Rot,
     /// Scaled angular velocity η = τω (world frame).
     pub eta: Vector3<f64>,
+    /// Goal orientation R_g.
     pub goal: Rot,
     /// D_R = log(R_g R(0)⁻¹) of this integration (Eq. 3).
     pub amplitude: Vector3<f64>,

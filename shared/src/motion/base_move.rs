@@ -8,6 +8,7 @@ use super::{
 };
 use crate::robot::RobotModel;
 
+/// Move(ℓ1, ℓ2): the platform drives from one location to another.
 pub struct Move;
 
 impl MotionClass for Move {

@@ -27,9 +27,13 @@ use crate::se3::Pose;
 /// 1 closed). The dataset's trajectory rows and the runtime's exported programs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
+    /// Time, s.
     pub t: f64,
+    /// Platform [x, y, yaw] in the world.
     pub base: [f64; 3],
+    /// Arm joints, rad.
     pub arm: [f64; crate::NA],
+    /// Gripper, 0 open … 1 closed.
     pub gripper: f64,
 }
 
@@ -52,9 +56,13 @@ pub enum Frame {
 /// workspace swept in frame f_o is stored in frame f_w.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Frames {
+    /// f_r, the robot frame whose pose is learned.
     pub robot: Frame,
+    /// f_a, the frame it is learned relative to.
     pub affordance: Frame,
+    /// f_w, the frame the workspace is stored in.
     pub workspace: Frame,
+    /// f_o, the frame the workspace is swept in.
     pub origin: Frame,
 }
 
@@ -66,7 +74,10 @@ pub enum Generator {
     /// ¬π_ArmRDMP: the same motion played backwards.
     ArmRdmpReversed,
     /// π_Grip(y0, g): command the gripper closed (`true`) or open and wait for it.
-    Grip { close: bool },
+    Grip {
+        /// Close (else open).
+        close: bool,
+    },
     /// π_BaseMove(y0, g): the platform drives itself to a goal stance.
     BaseMove,
 }
@@ -83,6 +94,7 @@ impl Generator {
 pub struct PhysicalState {
     /// T_b, the platform in the world.
     pub base: Pose,
+    /// Arm joints q_a.
     pub arm: JointVector,
     /// 0 open, 1 closed.
     pub gripper: f64,
@@ -109,6 +121,7 @@ pub enum Goal {
 /// What the admissible goal sets G (Sec. 5.3.3, line 7 of each class) draw on: the task's
 /// poses and the learned affordances.
 pub struct GoalContext<'a> {
+    /// The robot.
     pub model: &'a RobotModel,
     /// T_p,g: where the task wants the part.
     pub part_goal: Pose,

@@ -11,6 +11,7 @@ use crate::JointVector;
 use crate::kinematics::ArmKinematics;
 use crate::robot::RobotModel;
 
+/// Pick(p, ℓ): the arm takes part p at location ℓ.
 pub struct Pick;
 
 /// Frames of Pick and Place: TCP `e` relative to the part `p`; workspace swept in the

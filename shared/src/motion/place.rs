@@ -10,6 +10,7 @@ use crate::JointVector;
 use crate::kinematics::ArmKinematics;
 use crate::robot::RobotModel;
 
+/// Place(p, ℓ): the arm puts part p down at location ℓ.
 pub struct Place;
 
 impl MotionClass for Place {

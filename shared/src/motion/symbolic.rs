@@ -23,14 +23,18 @@ pub enum StateVar {
 /// Kind of an action parameter (a symbolic name of B).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Param {
+    /// A part.
     Part,
+    /// A location.
     Location,
 }
 
 /// The value an atom requires or sets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Value {
+    /// True.
     True,
+    /// False.
     False,
     /// `None` of B: holding nothing.
     Nothing,
@@ -41,8 +45,11 @@ pub enum Value {
 /// An atomic formula var(args…) = value; `args` are indices into the action's parameters.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Atom {
+    /// The state variable.
     pub var: StateVar,
+    /// Its arguments.
     pub args: Vec<u8, 2>,
+    /// The value.
     pub value: Value,
 }
 
@@ -60,9 +67,13 @@ impl Atom {
 /// α = (head, pre, eff).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ActionTemplate {
+    /// The action's name.
     pub head: heapless::String<16>,
+    /// Kinds of its parameters.
     pub params: Vec<Param, MAX_PARAMS>,
+    /// Preconditions.
     pub pre: Vec<Atom, MAX_ATOMS>,
+    /// Effects.
     pub eff: Vec<Atom, MAX_ATOMS>,
 }
 
