@@ -131,8 +131,8 @@ pub fn read_stream(path: &Path) -> anyhow::Result<Vec<Record>> {
 /// The host runtime's setpoints for the task in `block` on blob `blob`: the firmware's
 /// computation (plan, then the executor against the ideal cell), run here.
 pub fn host_stream(blob: &[u8], block: &[u8]) -> anyhow::Result<Vec<Setpoint>> {
-    let rt = Runtime::load(blob).map_err(|e| anyhow::anyhow!("blob: {e}"))?;
-    let task = task_block::decode(block).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let rt = Runtime::load(blob).context("loading the blob")?;
+    let task = task_block::decode(block).context("decoding the task block")?;
     let p = plan(&rt, &task).map_err(|e| anyhow::anyhow!("plan: {e}"))?;
     let Some(program) = p.program else {
         bail!("the task has no program");

@@ -375,7 +375,31 @@ impl<'r, 'a> Executor<'r, 'a> {
         Ok(())
     }
 
+    /// The tick's work after the checks: the current segment's step into `sp`.
     fn advance(&mut self, now: Instant, m: &Measured, sp: &mut Setpoint) -> Result<(), Fault> {
+        self.check(now, m)?;
+        let Some(seg) = self.program.segments.get(self.segment).copied() else {
+            sp.mode = Mode::Done;
+            sp.arm_velocity = [0.0; NA];
+            return Ok(());
+        };
+        let index = self.segment as u8;
+        sp.segment = index;
+        let entered = *self.entered.get_or_insert(now);
+        let waited = now
+            .checked_duration_since(entered)
+            .unwrap_or(Duration::from_ticks(0));
+        match seg {
+            Segment::Base { goal } => self.base(&goal, m, waited, sp),
+            Segment::Grip { close } => self.grip(close, m, waited, sp),
+            Segment::Arm { .. } => self.arm(sp),
+            Segment::Reverse { .. } => self.reverse(sp),
+        }
+    }
+
+    /// The measured state is finite, time runs forward, and every arm joint tracks the
+    /// previous setpoint.
+    fn check(&self, now: Instant, m: &Measured) -> Result<(), Fault> {
         let finite = m.arm.iter().chain(&m.base).all(|v| v.is_finite()) && m.gripper.is_finite();
         if !finite {
             return Err(Fault::NonFinite);
@@ -392,97 +416,118 @@ impl<'r, 'a> Executor<'r, 'a> {
                 });
             }
         }
-        let Some(seg) = self.program.segments.get(self.segment).copied() else {
-            sp.mode = Mode::Done;
+        Ok(())
+    }
+
+    /// π_BaseMove: command the platform goal and wait for the platform to arrive, preparing
+    /// the next arm motion meanwhile.
+    fn base(
+        &mut self,
+        goal: &Pose,
+        m: &Measured,
+        waited: Duration,
+        sp: &mut Setpoint,
+    ) -> Result<(), Fault> {
+        sp.mode = Mode::Base;
+        sp.arm_velocity = [0.0; NA];
+        sp.base_goal = planar(goal);
+        let g = sp.base_goal;
+        let (dx, dy) = (m.base[0] - g[0], m.base[1] - g[1]);
+        let there = libm::sqrt(dx * dx + dy * dy) <= self.cfg.base_position_tolerance
+            && libm::fabs(wrap(m.base[2] - g[2])) <= self.cfg.base_yaw_tolerance;
+        self.prepare_ahead()?;
+        self.finish_or_wait(there, waited, self.cfg.base_timeout, sp.segment)
+    }
+
+    /// π_Grip: command the gripper and wait for it, preparing the next arm motion meanwhile.
+    fn grip(
+        &mut self,
+        close: bool,
+        m: &Measured,
+        waited: Duration,
+        sp: &mut Setpoint,
+    ) -> Result<(), Fault> {
+        sp.mode = Mode::Gripper;
+        sp.arm_velocity = [0.0; NA];
+        sp.close_gripper = close;
+        let there = if close {
+            m.gripper >= self.cfg.gripper_closed
+        } else {
+            m.gripper <= self.cfg.gripper_open
+        };
+        self.prepare_ahead()?;
+        self.finish_or_wait(there, waited, self.cfg.gripper_timeout, sp.segment)
+    }
+
+    /// A waiting segment ends when its target is reached, or faults after `timeout`.
+    fn finish_or_wait(
+        &mut self,
+        there: bool,
+        waited: Duration,
+        timeout: Duration,
+        segment: u8,
+    ) -> Result<(), Fault> {
+        if there {
+            self.finish_segment();
+        } else if waited > timeout {
+            return Err(Fault::Timeout { segment });
+        }
+        Ok(())
+    }
+
+    /// π_ArmRDMP: one RDMP step (Alg. 2), recorded for the reversal; the arm holds while the
+    /// segment is still being prepared.
+    fn arm(&mut self, sp: &mut Setpoint) -> Result<(), Fault> {
+        let index = sp.segment;
+        sp.mode = Mode::Arm;
+        if !self.prepare(self.segment)? {
+            // Not prepared ahead: hold the arm while preparing.
             sp.arm_velocity = [0.0; NA];
             return Ok(());
+        }
+        let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
+        let Some(run) = self.run.as_mut() else {
+            return Err(Fault::Program { segment: index });
         };
-        let index = self.segment as u8;
-        sp.segment = index;
-        let entered = *self.entered.get_or_insert(now);
-        let waited = now
-            .checked_duration_since(entered)
-            .unwrap_or(Duration::from_ticks(0));
-        match seg {
-            Segment::Base { goal } => {
-                sp.mode = Mode::Base;
-                sp.arm_velocity = [0.0; NA];
-                sp.base_goal = planar(&goal);
-                let g = sp.base_goal;
-                let (dx, dy) = (m.base[0] - g[0], m.base[1] - g[1]);
-                let there = libm::sqrt(dx * dx + dy * dy) <= self.cfg.base_position_tolerance
-                    && libm::fabs(wrap(m.base[2] - g[2])) <= self.cfg.base_yaw_tolerance;
-                self.prepare_ahead()?;
-                if there {
-                    self.finish_segment();
-                } else if waited > self.cfg.base_timeout {
-                    return Err(Fault::Timeout { segment: index });
-                }
+        let rdmp = &self.rdmp;
+        self.reversal.record(run);
+        let step = run.step(model, rdmp, cfg).map_err(|error| Fault::Rdmp {
+            segment: index,
+            error,
+        })?;
+        sp.arm = step.q.into();
+        sp.arm_velocity = step.qd.into();
+        if run.finished() {
+            if let Some(run) = self.run.take() {
+                self.reversal.adopt(run);
             }
-            Segment::Grip { close } => {
-                sp.mode = Mode::Gripper;
-                sp.arm_velocity = [0.0; NA];
-                sp.close_gripper = close;
-                let there = if close {
-                    m.gripper >= self.cfg.gripper_closed
-                } else {
-                    m.gripper <= self.cfg.gripper_open
-                };
-                self.prepare_ahead()?;
-                if there {
-                    self.finish_segment();
-                } else if waited > self.cfg.gripper_timeout {
-                    return Err(Fault::Timeout { segment: index });
-                }
-            }
-            Segment::Arm { .. } => {
-                sp.mode = Mode::Arm;
-                if !self.prepare(self.segment)? {
-                    // Not prepared ahead: hold the arm while preparing.
-                    sp.arm_velocity = [0.0; NA];
-                    return Ok(());
-                }
-                let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
-                let Some(run) = self.run.as_mut() else {
-                    return Err(Fault::Program { segment: index });
-                };
-                let rdmp = &self.rdmp;
-                self.reversal.record(run);
-                let step = run.step(model, rdmp, cfg).map_err(|error| Fault::Rdmp {
-                    segment: index,
-                    error,
-                })?;
-                sp.arm = step.q.into();
-                sp.arm_velocity = step.qd.into();
-                if run.finished() {
-                    if let Some(run) = self.run.take() {
-                        self.reversal.adopt(run);
-                    }
-                    self.finish_segment();
-                }
-            }
-            Segment::Reverse { .. } => {
-                sp.mode = Mode::Arm;
-                let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
-                if self.prepared.is_none() {
-                    return Err(Fault::Program { segment: index });
-                }
-                let rdmp = &self.rdmp;
-                let q = self
-                    .reversal
-                    .next(model, rdmp, cfg)
-                    .map_err(|error| Fault::Reverse {
-                        segment: index,
-                        error,
-                    })?
-                    .ok_or(Fault::Program { segment: index })?;
-                let previous = JointVector::from(self.last.arm);
-                sp.arm = q.into();
-                sp.arm_velocity = ((q - previous) / cfg.dt).into();
-                if self.reversal.finished() {
-                    self.finish_segment();
-                }
-            }
+            self.finish_segment();
+        }
+        Ok(())
+    }
+
+    /// ¬π_ArmRDMP: one step of the preceding arm motion played backwards.
+    fn reverse(&mut self, sp: &mut Setpoint) -> Result<(), Fault> {
+        let index = sp.segment;
+        sp.mode = Mode::Arm;
+        let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
+        if self.prepared.is_none() {
+            return Err(Fault::Program { segment: index });
+        }
+        let rdmp = &self.rdmp;
+        let q = self
+            .reversal
+            .next(model, rdmp, cfg)
+            .map_err(|error| Fault::Reverse {
+                segment: index,
+                error,
+            })?
+            .ok_or(Fault::Program { segment: index })?;
+        let previous = JointVector::from(self.last.arm);
+        sp.arm = q.into();
+        sp.arm_velocity = ((q - previous) / cfg.dt).into();
+        if self.reversal.finished() {
+            self.finish_segment();
         }
         Ok(())
     }

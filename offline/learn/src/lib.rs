@@ -1,12 +1,12 @@
 //! `prf-learn`: Learn (Alg. 3) on a dataset of robot programs, and the blob compiler.
 //!
-//! - [`learn`]: the pass over the dataset, driven by the motion classes of
+//! - [`learn`](mod@learn): the pass over the dataset, driven by the motion classes of
 //!   [`prf_shared::motion::CLASSES`];
 //! - [`affordance`]: stances and grasps with tolerance;
 //! - [`workspace`] (+ [`edt`]): Ω+ per location type as a conservative distance field;
 //! - [`skills`]: TrainRDMP on arm motions, the skill sets and share();
-//! - [`compile`]: Learn's output → the blob ([`prf_shared::blob`]);
-//! - [`report`]: a blob's contents and sizes, as `prf learn` and `prf inspect` print them.
+//! - [`compile`](mod@compile): Learn's output → the blob ([`prf_shared::blob`]);
+//! - [`report`](mod@report): a blob's contents and sizes, as `prf learn` and `prf inspect` print them.
 //!
 //! It knows neither the ground-truth cell nor any IPC: `cargo tree -p prf-learn` shows no
 //! simulator, iceoryx2, Ruckig or terminal crate.

@@ -6,6 +6,7 @@
 //! latency. (3) Ruckig's per-update time and allocations in the output stage.
 
 use crate::bench::alloc_count::allocations;
+use crate::cli::args::{read_blob, runtime};
 use crate::cli::child::{ChildGuard, spawn_firmware};
 use anyhow::{Context, Result, anyhow, bail};
 use prf_host::cell::{Cell, CellConfig, TRACKING_GAIN};
@@ -15,7 +16,6 @@ use prf_ipc::clock::now_ns;
 use prf_ipc::link;
 use prf_ipc::messages::SetpointMsg;
 use prf_ruckig::Online;
-use prf_runtime::Runtime;
 use prf_runtime::executor::{ExecutorConfig, planar};
 use prf_runtime::plan::plan;
 use prf_shared::limits::MotionLimits;
@@ -202,11 +202,11 @@ pub fn run(a: &Args) -> Result<()> {
     );
 
     // (3) Ruckig in the output stage, on a real program.
-    let bytes = std::fs::read(&a.blob).with_context(|| format!("reading {}", a.blob.display()))?;
-    let rt = Runtime::load(&bytes).map_err(|e| anyhow!("{}: {e}", a.blob.display()))?;
+    let bytes = read_blob(&a.blob)?;
+    let rt = runtime(&bytes, &a.blob, Default::default())?;
     let world = World::example();
     let ft = FloorTask::new(&world, "Part1", "CNC1", "CNC2")?;
-    let p = plan(&rt, &ft.task()).map_err(|e| anyhow!("{e}"))?;
+    let p = plan(&rt, &ft.task()).map_err(|e| anyhow!("task {}: {e}", ft.label()))?;
     let program = p.program.context("no program")?;
     let ideal = execute(&rt, &program, &ft.home, ExecutorConfig::default(), 1 << 24);
     let l = MotionLimits::kmr_iiwa(&rt.model);

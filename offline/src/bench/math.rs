@@ -203,7 +203,7 @@ fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
     use prf_sim::tasks::world_tasks;
     use prf_sim::world::World;
 
-    let bytes = std::fs::read(path)?;
+    let bytes = crate::cli::args::read_blob(path)?;
     println!(
         "\nruntime on {} ({} KiB)",
         path.display(),
@@ -217,7 +217,7 @@ fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
         &load,
         "µs",
     );
-    let rt = Runtime::load(&bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let rt = crate::cli::args::runtime(&bytes, path, Default::default())?;
     let tasks = world_tasks(&World::example());
     let (mut integrations, mut grid, mut steps, mut feasible) = (0u64, 0u64, 0u64, 0);
     for ft in &tasks {

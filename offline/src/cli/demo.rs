@@ -11,13 +11,14 @@ use prf_files::dataset::Dataset;
 use prf_host::cell::{Cell, CellConfig};
 use prf_learn::compile;
 use prf_learn::{LearnConfig, learn};
+use prf_runtime::Runtime;
 use prf_runtime::executor::planar;
 use prf_runtime::plan::plan;
 use prf_shared::robot::RobotModel;
 use prf_sim::demogen::generate_dataset;
-use prf_sim::tasks::world_tasks;
+use prf_sim::tasks::{FloorTask, world_tasks};
 use prf_sim::world::World;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(clap::Args, Debug, Default)]
@@ -34,6 +35,7 @@ pub struct Args {
     pub regenerate: bool,
 }
 
+/// The main job: dataset → blob → controller → every task planned and executed.
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let dir = if a.dir.as_os_str().is_empty() {
         PathBuf::from("target/prf-demo")
@@ -49,40 +51,88 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             bail!("--task {t}: the example cell has tasks 1..={}", tasks.len());
         }
     }
+    let dataset = dataset(&dir, &world, &model, a.regenerate)?;
+    let (blob, bytes) = blob(&dir, &dataset, &model)?;
+    let rt = runtime(&bytes, &blob, Default::default())?;
+    // The first task as a task block, for the firmware's self-contained image (its default).
+    if let Some(first) = tasks.first() {
+        let path = dir.join("task.bin");
+        std::fs::write(&path, first.task_block()?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    // The controller, a process of its own, on a cell name no one else uses.
+    let cell_name = format!("demo-{}", std::process::id());
+    let log = dir.join("firmware-sim.log");
+    let mut child = ChildGuard(spawn_firmware(
+        &cell_name,
+        planar(&world.home.pose()),
+        &log,
+    )?);
+    let mut cell = Cell::connect(CellConfig::new(&cell_name), &rt)?;
+    println!(
+        "firmware-sim: pid {}, cell {cell_name:?}, log {}",
+        child.0.id(),
+        log.display()
+    );
+    let (run, ok) = execute_all(&rt, &mut cell, &tasks, &a.task)?;
+    cell.shutdown()?;
+    let _ = child.0.wait();
+    println!(
+        "\n{ok} of {run} executed tasks completed; controller log: {}",
+        log.display()
+    );
+    if ok < run {
+        bail!("{} task(s) faulted", run - ok);
+    }
+    println!(
+        "the same blob on the cell-controller firmware (Cortex-M7 under QEMU, timing budgets, \
+         stream checked against the host): prf firmware {}",
+        blob.display()
+    );
+    Ok(())
+}
 
-    // 1. Dataset: the 64 afforded tasks of the example cell, by the ground-truth planner.
+/// Step 1: the 64 afforded tasks of the example cell, by the ground-truth planner (cached in
+/// `dir/dataset`).
+fn dataset(
+    dir: &Path,
+    world: &World,
+    model: &RobotModel,
+    regenerate: bool,
+) -> anyhow::Result<Dataset> {
     let ds_dir = dir.join("dataset");
     let marker = ds_dir.join(".complete");
-    let t0 = Instant::now();
-    let dataset = if marker.exists() && !a.regenerate {
-        let ds = Dataset::read(&ds_dir, &model)?;
+    if marker.exists() && !regenerate {
+        let ds = Dataset::read(&ds_dir, model)?;
         println!(
             "dataset: {} demonstrations cached in {} (--regenerate to make them again)",
             ds.demonstrations.len(),
             ds_dir.display()
         );
-        ds
-    } else {
-        let afforded = world.afforded_tasks();
-        let b = Bar::new("generating", "demonstrations", false);
-        let ds = generate_dataset(&world, &afforded, 1, 100.0, &|p| b.report(p))?;
-        b.finish();
-        ds.write(&ds_dir)
-            .with_context(|| format!("writing {}", ds_dir.display()))?;
-        std::fs::write(&marker, b"")?;
-        println!(
-            "dataset: generated {} demonstrations into {} in {:.1} s",
-            ds.demonstrations.len(),
-            ds_dir.display(),
-            t0.elapsed().as_secs_f64()
-        );
-        ds
-    };
+        return Ok(ds);
+    }
+    let t0 = Instant::now();
+    let afforded = world.afforded_tasks();
+    let b = Bar::new("generating", "demonstrations", false);
+    let ds = generate_dataset(world, &afforded, 1, 100.0, &|p| b.report(p))?;
+    b.finish();
+    ds.write(&ds_dir)
+        .with_context(|| format!("writing {}", ds_dir.display()))?;
+    std::fs::write(&marker, b"")?;
+    println!(
+        "dataset: generated {} demonstrations into {} in {:.1} s",
+        ds.demonstrations.len(),
+        ds_dir.display(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(ds)
+}
 
-    // 2. Learn and compile.
+/// Step 2: learn and compile; the blob's path and bytes.
+fn blob(dir: &Path, dataset: &Dataset, model: &RobotModel) -> anyhow::Result<(PathBuf, Vec<u8>)> {
     let t1 = Instant::now();
     let b = Bar::new("learning", "units", false);
-    let knowledge = learn(&dataset, &model, &LearnConfig::default(), &|p| b.report(p))?;
+    let knowledge = learn(dataset, model, &LearnConfig::default(), &|p| b.report(p))?;
     b.finish();
     let bytes = compile(&knowledge)?;
     let blob = dir.join("cell.blob");
@@ -93,27 +143,17 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         bytes.len() as f64 / 1024.0,
         t1.elapsed().as_secs_f64()
     );
-    let rt = runtime(&bytes, &blob, Default::default())?;
-    // The first task as a task block, for the firmware's self-contained image (its default).
-    if let Some(first) = tasks.first() {
-        let path = dir.join("task.bin");
-        std::fs::write(&path, first.task_block()?)
-            .with_context(|| format!("writing {}", path.display()))?;
-    }
+    Ok((blob, bytes))
+}
 
-    // 3. The controller, a process of its own, on a cell name no one else uses.
-    let cell_name = format!("demo-{}", std::process::id());
-    let log = dir.join("firmware-sim.log");
-    let home = planar(&world.home.pose());
-    let mut child = ChildGuard(spawn_firmware(&cell_name, home, &log)?);
-    let mut cell = Cell::connect(CellConfig::new(&cell_name), &rt)?;
-    println!(
-        "firmware-sim: pid {}, cell {cell_name:?}, log {}",
-        child.0.id(),
-        log.display()
-    );
-
-    // 4. Plan and execute.
+/// Step 3: plan every task (or those in `only`, 1-based) and execute each feasible one on the
+/// cell, one row each; (executed, completed).
+fn execute_all(
+    rt: &Runtime<'_>,
+    cell: &mut Cell,
+    tasks: &[FloorTask],
+    only: &[usize],
+) -> anyhow::Result<(usize, usize)> {
     println!(
         "\n{:>2}  {:<22} {:<8} {:>7}  {:<10} {:>5} {:>8} {:>9} {:>4} {:>6} {:>13}",
         "#",
@@ -130,11 +170,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     );
     let (mut run, mut ok) = (0, 0);
     for (i, ft) in tasks.iter().enumerate() {
-        if !a.task.is_empty() && !a.task.contains(&(i + 1)) {
+        if !only.is_empty() && !only.contains(&(i + 1)) {
             continue;
         }
         let label = ft.label();
-        let p = match plan(&rt, &ft.task()) {
+        let p = match plan(rt, &ft.task()) {
             Ok(p) => p,
             Err(e) => {
                 println!("{:>2}  {label:<22} no: {e}", i + 1);
@@ -162,7 +202,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         };
         run += 1;
         // Tasks start where the previous one ended: at home.
-        let r = cell.execute(&rt, program, &ft.home)?;
+        let r = cell.execute(rt, program, &ft.home)?;
         let tail = format!(
             "{:>8.1} {:>9.2} {:>4} {:>6} {:>6.1}/{:<6.1}",
             r.duration_s,
@@ -183,19 +223,5 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             ),
         }
     }
-    cell.shutdown()?;
-    let _ = child.0.wait();
-    println!(
-        "\n{ok} of {run} executed tasks completed; controller log: {}",
-        log.display()
-    );
-    if ok < run {
-        bail!("{} task(s) faulted", run - ok);
-    }
-    println!(
-        "the same blob on the cell-controller firmware (Cortex-M7 under QEMU, timing budgets, \
-         stream checked against the host): prf firmware {}",
-        blob.display()
-    );
-    Ok(())
+    Ok((run, ok))
 }
