@@ -25,7 +25,7 @@ use std::time::{Duration, Instant};
 pub enum ControllerError {
     #[error(transparent)]
     Ipc(#[from] IpcError),
-    #[error("braking or driving the platform: {0}")]
+    #[error("braking or driving the platform")]
     Ruckig(#[from] RuckigError),
     #[error("iceoryx2 wait set: {0}")]
     WaitSet(String),

@@ -201,16 +201,7 @@ impl core::fmt::Display for Fault {
     }
 }
 
-impl core::error::Error for Fault {
-    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
-        match self {
-            Fault::Rdmp { error, .. } => Some(error),
-            Fault::Reverse { error, .. } => Some(error),
-            Fault::Load(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+impl core::error::Error for Fault {}
 
 pub use prf_shared::kinematics::planar;
 pub use prf_shared::se3::wrap;

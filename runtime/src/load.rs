@@ -39,14 +39,7 @@ impl core::fmt::Display for LoadError {
     }
 }
 
-impl core::error::Error for LoadError {
-    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
-        match self {
-            LoadError::Blob(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+impl core::error::Error for LoadError {}
 
 /// Settings the planner and the executor share, so the planned trajectory is the executed one.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -82,15 +82,7 @@ impl core::fmt::Display for ProgramError {
     }
 }
 
-impl core::error::Error for ProgramError {
-    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
-        match self {
-            ProgramError::Load(e) => Some(e),
-            ProgramError::Reverse(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+impl core::error::Error for ProgramError {}
 
 impl From<LoadError> for ProgramError {
     fn from(e: LoadError) -> Self {

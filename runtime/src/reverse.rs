@@ -231,14 +231,7 @@ impl core::fmt::Display for ReverseError {
     }
 }
 
-impl core::error::Error for ReverseError {
-    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
-        match self {
-            ReverseError::Rdmp(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+impl core::error::Error for ReverseError {}
 
 impl From<RdmpError> for ReverseError {
     fn from(e: RdmpError) -> Self {

@@ -142,14 +142,7 @@ impl core::fmt::Display for SkillPlanError {
     }
 }
 
-impl core::error::Error for SkillPlanError {
-    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
-        match self {
-            SkillPlanError::Load(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+impl core::error::Error for SkillPlanError {}
 
 impl From<LoadError> for SkillPlanError {
     fn from(e: LoadError) -> Self {

@@ -176,14 +176,7 @@ impl core::fmt::Display for RdmpError {
     }
 }
 
-impl core::error::Error for RdmpError {
-    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
-        match self {
-            RdmpError::Dmp(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+impl core::error::Error for RdmpError {}
 
 impl From<DmpError> for RdmpError {
     fn from(e: DmpError) -> Self {

@@ -56,19 +56,18 @@ pub enum RobotFileError {
         #[source]
         source: urdf_rs::UrdfError,
     },
-    #[error("{file}:{line}: {source}")]
+    #[error("{file}:{line}: {detail}")]
     Json {
         file: String,
         line: usize,
-        #[source]
-        source: serde_json::Error,
+        /// What the JSON parser found.
+        detail: String,
     },
-    #[error("{urdf} + {spheres}: invalid robot model: {source}")]
+    #[error("{urdf} + {spheres}: invalid robot model: {error}")]
     Model {
         urdf: String,
         spheres: String,
-        #[source]
-        source: prf_shared::robot::ModelError,
+        error: prf_shared::robot::ModelError,
     },
     /// The description parses but is not a robot the runtime takes (the message says why).
     #[error("{0}")]
@@ -202,12 +201,11 @@ pub fn parse(
     frames.extend(revolute.iter().map(|&i| chain[i].child.link.as_str()));
     frames.push(flange_joint.child.link.as_str());
 
-    let file: SphereFile =
-        serde_json::from_str(spheres).map_err(|source| RobotFileError::Json {
-            file: spheres_name.to_string(),
-            line: source.line(),
-            source,
-        })?;
+    let file: SphereFile = serde_json::from_str(spheres).map_err(|e| RobotFileError::Json {
+        file: spheres_name.to_string(),
+        line: e.line(),
+        detail: e.to_string(),
+    })?;
     if file.format != "prf-spheres" || file.version != 1 {
         invalid!(
             "{spheres_name}: format '{}' v{}, expected 'prf-spheres' v1",
@@ -253,10 +251,10 @@ pub fn parse(
         platform,
         home: file.home_deg.map(|d| d.to_radians()),
     };
-    model.validate().map_err(|source| RobotFileError::Model {
+    model.validate().map_err(|error| RobotFileError::Model {
         urdf: urdf_name.to_string(),
         spheres: spheres_name.to_string(),
-        source,
+        error,
     })?;
     Ok(model)
 }

@@ -115,15 +115,14 @@ pub enum LearnError {
     #[error("demonstration {demonstration}: part type {kind} is not among the dataset's parts")]
     PartType { demonstration: String, kind: String },
     #[error(
-        "demonstration {demonstration} (lines {first}–{last} of its trajectory): {class} arm motion cannot be trained: {source}"
+        "demonstration {demonstration} (lines {first}–{last} of its trajectory): {class} arm motion cannot be trained: {error}"
     )]
     Skill {
         demonstration: String,
         first: usize,
         last: usize,
         class: &'static str,
-        #[source]
-        source: prf_shared::rdmp::RdmpError,
+        error: prf_shared::rdmp::RdmpError,
     },
 }
 
@@ -221,12 +220,12 @@ fn lessons(
                 (Some(a), true) => {
                     let (path, dt) = skills::uniform_path(&d.samples[a.forward.clone()]);
                     let rdmp = skills::train(model, &path, dt, &cfg.dmp, cfg.min_manipulability)
-                        .map_err(|source| LearnError::Skill {
+                        .map_err(|error| LearnError::Skill {
                             demonstration: d.id.clone(),
                             first: line(a.forward.start),
                             last: line(a.forward.end - 1),
                             class: m.name(),
-                            source,
+                            error,
                         })?;
                     Some((path, dt, rdmp))
                 }

@@ -9,13 +9,25 @@ use std::fmt::Write;
 #[derive(Debug, thiserror::Error)]
 pub enum ReportError {
     #[error("invalid blob: {0}")]
-    Blob(#[from] prf_shared::blob::BlobError),
+    Blob(prf_shared::blob::BlobError),
     #[error("invalid blob: workspace: {0}")]
-    Field(#[from] prf_shared::field::FieldError),
+    Field(prf_shared::field::FieldError),
     #[error("encoding the robot record")]
     Encode(#[from] postcard::Error),
     #[error("formatting the report")]
     Format(#[from] std::fmt::Error),
+}
+
+impl From<prf_shared::blob::BlobError> for ReportError {
+    fn from(e: prf_shared::blob::BlobError) -> Self {
+        ReportError::Blob(e)
+    }
+}
+
+impl From<prf_shared::field::FieldError> for ReportError {
+    fn from(e: prf_shared::field::FieldError) -> Self {
+        ReportError::Field(e)
+    }
 }
 
 fn kib(b: usize) -> String {

@@ -13,11 +13,10 @@ pub enum FloorTaskError {
     UnknownPart { id: String, known: String },
     #[error("unknown location id {id:?} (the floor plan has {known})")]
     UnknownLocation { id: String, known: String },
-    #[error("task {task}: {source}")]
+    #[error("task {task}: {error}")]
     TaskBlock {
         task: String,
-        #[source]
-        source: prf_runtime::task_block::TaskBlockError,
+        error: prf_runtime::task_block::TaskBlockError,
     },
 }
 
@@ -93,10 +92,10 @@ impl FloorTask {
     /// its TASK region.
     pub fn task_block(&self) -> Result<Vec<u8>, FloorTaskError> {
         let mut buf = [0u8; 1024];
-        let n = prf_runtime::task_block::encode(&self.task(), &mut buf).map_err(|source| {
+        let n = prf_runtime::task_block::encode(&self.task(), &mut buf).map_err(|error| {
             FloorTaskError::TaskBlock {
                 task: self.label(),
-                source,
+                error,
             }
         })?;
         Ok(buf[..n].to_vec())

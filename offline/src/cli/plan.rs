@@ -1,7 +1,7 @@
 //! `prf plan`: plan a task (or all tasks of the floor plan) with the no_std runtime on a blob,
 //! print the choice, and optionally export the program at 1 kHz.
 
-use crate::cli::args::{read_blob, runtime};
+use crate::cli::args::{TaskArgs, WorldArgs, read_blob, runtime};
 use anyhow::{Context, bail};
 use prf_files::dataset::trajectory_csv;
 use prf_host::ideal::execute;
@@ -18,15 +18,9 @@ use std::time::Instant;
 pub struct Args {
     /// The blob (from `prf learn`).
     pub blob: PathBuf,
-    /// Part instance id, e.g. Part1.
-    #[arg(long, required_unless_present = "all")]
-    pub part: Option<String>,
-    /// Location instance the part is at, e.g. CNC1.
-    #[arg(long, required_unless_present = "all")]
-    pub from: Option<String>,
-    /// Location instance the part goes to, e.g. Table1.
-    #[arg(long, required_unless_present = "all")]
-    pub to: Option<String>,
+    /// The task (all three of --part, --from, --to), unless --all.
+    #[command(flatten)]
+    pub task: TaskArgs,
     /// Plan every task of the floor plan (18 in the example cell) and print a table.
     #[arg(long, conflicts_with_all = ["part", "from", "to", "export"])]
     pub all: bool,
@@ -37,17 +31,16 @@ pub struct Args {
     /// region, 0x003F0000 on mps2-an500).
     #[arg(long, conflicts_with = "all")]
     pub task_block: Option<PathBuf>,
-    /// Floor plan (world file) with the location poses and the platform's home; default: the
-    /// built-in example cell. Its obstacles are not read.
-    #[arg(long)]
-    pub world: Option<PathBuf>,
+    /// The floor plan (its obstacles are not read).
+    #[command(flatten)]
+    pub world: WorldArgs,
     /// A task is physically feasible when J* is at most this risk, m.
     #[arg(long, default_value_t = 0.0)]
     pub threshold: f64,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    let world = crate::cli::args::load_world(&a.world)?;
+    let world = a.world.load()?;
     let bytes = read_blob(&a.blob)?;
     let t0 = Instant::now();
     let config = RuntimeConfig {
@@ -66,10 +59,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.all {
         return plan_all(&rt, &world);
     }
-    let (Some(part), Some(from), Some(to)) = (&a.part, &a.from, &a.to) else {
-        bail!("--part, --from and --to are required without --all");
-    };
-    let ft = FloorTask::new(&world, part, from, to)?;
+    let ft = a.task.required(&world)?;
     if let Some(path) = &a.task_block {
         let block = ft.task_block()?;
         std::fs::write(path, &block).with_context(|| format!("writing {}", path.display()))?;

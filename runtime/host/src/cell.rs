@@ -27,7 +27,7 @@ use serde::Serialize;
 pub enum CellError {
     #[error(transparent)]
     Ipc(#[from] IpcError),
-    #[error("the output stage failed: {0}")]
+    #[error("the output stage failed")]
     Ruckig(#[from] RuckigError),
     #[error(
         "no joint state on prf/{cell}/joint-state within {seconds:.1} s: is `prf firmware-sim --cell {cell}` running?"

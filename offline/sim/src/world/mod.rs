@@ -26,13 +26,13 @@ pub enum WorldError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{file}:{line}:{column}: {source}")]
+    #[error("{file}:{line}:{column}: {detail}")]
     Json {
         file: String,
         line: usize,
         column: usize,
-        #[source]
-        source: serde_json::Error,
+        /// What the JSON parser found.
+        detail: String,
     },
     /// The file parses but describes no valid cell (the message says where and why).
     #[error("{0}")]
@@ -242,7 +242,7 @@ impl World {
             file: source.display().to_string(),
             line: e.line(),
             column: e.column(),
-            source: e,
+            detail: e.to_string(),
         })?;
         world.source = source.to_path_buf();
         world.validate(text)?;
