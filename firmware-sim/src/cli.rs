@@ -79,16 +79,6 @@ pub fn run(args: &Args) -> Result<(), controller::ControllerError> {
         cfg.log.display()
     );
     let s = controller::run(&cfg)?;
-    eprintln!(
-        "prf firmware-sim: {} cycles, {} sessions, {} setpoints, lost {}, repeated {}, refused {}, watchdog trips {}, max tracking error {:.3} mrad",
-        s.cycles,
-        s.sessions,
-        s.setpoints,
-        s.lost,
-        s.repeated,
-        s.rejected,
-        s.watchdog_trips,
-        s.max_tracking_error * 1e3
-    );
+    eprintln!("prf firmware-sim: {s}");
     Ok(())
 }

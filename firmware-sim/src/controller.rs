@@ -432,18 +432,26 @@ impl<'c> Controller<'c> {
     /// The exit line of the log; the summary.
     fn finish(mut self) -> Result<Summary> {
         let s = self.summary.clone();
-        self.event(format_args!(
-            "exit: {} cycles, {} sessions, {} setpoints, lost {}, repeated {}, refused {}, watchdog trips {}, max tracking error {:.3} mrad",
-            s.cycles,
-            s.sessions,
-            s.setpoints,
-            s.lost,
-            s.repeated,
-            s.rejected,
-            s.watchdog_trips,
-            s.max_tracking_error * 1e3
-        ))?;
+        self.event(format_args!("exit: {s}"))?;
         Ok(s)
+    }
+}
+
+impl std::fmt::Display for Summary {
+    /// "N cycles, N sessions, N setpoints, lost …, max tracking error … mrad".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} cycles, {} sessions, {} setpoints, lost {}, repeated {}, refused {}, watchdog trips {}, max tracking error {:.3} mrad",
+            self.cycles,
+            self.sessions,
+            self.setpoints,
+            self.lost,
+            self.repeated,
+            self.rejected,
+            self.watchdog_trips,
+            self.max_tracking_error * 1e3
+        )
     }
 }
 
