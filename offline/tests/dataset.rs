@@ -47,6 +47,7 @@ fn small() -> Dataset {
         robot: "kmr-iiwa14".into(),
         description: Some("test".into()),
         rate_hz: 100.0,
+        clearance_demo: Some(0.05),
         parts: vec![inst("Part1", "Part1"), inst("Part2", "Part2")],
         locations: vec![inst("CNC1", "CNC"), inst("Table1", "Table")],
         demonstrations: vec![demo(0), demo(1)],
@@ -302,6 +303,25 @@ fn location_type_disagrees_with_manifest() {
             task: "Printer".into()
         }
     );
+}
+
+/// r_d in the manifest: kept by a round trip (above), refused when not a positive length, with
+/// its line.
+#[test]
+fn clearance_must_be_a_positive_length() {
+    for bad in ["0", "-0.05"] {
+        let dir = written("clearance");
+        let manifest = dir.path().join("manifest.json");
+        let text = std::fs::read_to_string(&manifest).expect("manifest");
+        let l = text
+            .lines()
+            .position(|l| l.contains("\"clearance_demo_m\""))
+            .expect("the writer states r_d")
+            + 1;
+        edit_line(&manifest, l, &format!("  \"clearance_demo_m\": {bad},"));
+        let kind = rejected(dir.path(), "manifest.json", Some(l));
+        assert!(matches!(kind, ErrorKind::BadClearance(v) if v == bad.parse::<f64>().unwrap()));
+    }
 }
 
 #[test]

@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 use prf_files::dataset::{Dataset, Demonstration};
 use prf_learn::compile;
 use prf_learn::workspace::Sweep;
-use prf_learn::{Knowledge, LearnConfig, affordance, learn};
+use prf_learn::{Knowledge, LearnConfig, LearnError, affordance, learn};
 use prf_shared::JointVector;
 use prf_shared::blob::{Blob, BlobError, HEADER_LEN, crc32};
 use prf_shared::field::{DistanceField, Field};
@@ -410,4 +410,71 @@ fn corrupt_blobs_are_refused_with_their_own_error() {
             }
         }
     }
+}
+
+/// Issue 23: r_d is a fact of the dataset. Without it learning is refused, with a larger one
+/// than stated too; with its own r_d = 0.04 m it learns ε = r_d − r = 10 mm (the workspace is
+/// 10 mm shallower than with r_d = 0.05 m), and the blob says so.
+#[test]
+fn learning_takes_r_d_from_the_dataset_and_refuses_to_guess() {
+    let f = fixture();
+    let mut ds = f.dataset.clone();
+    ds.demonstrations.truncate(8);
+    let learn_with =
+        |ds: &Dataset, cfg: LearnConfig| learn(ds, &f.model, &cfg, &prf_files::progress::quiet);
+    let mut unstated = ds.clone();
+    unstated.clearance_demo = None;
+    let e = learn_with(&unstated, LearnConfig::default()).expect_err("no r_d");
+    assert!(matches!(e, LearnError::NoClearance));
+    assert!(e.to_string().contains("clearance_demo_m"), "{e}");
+    let mut stated = ds.clone();
+    stated.clearance_demo = Some(0.04);
+    let old_default = LearnConfig {
+        clearance_demo: Some(0.05),
+        ..LearnConfig::default()
+    };
+    let e = learn_with(&stated, old_default).expect_err("r_d above the stated one");
+    assert!(
+        matches!(e, LearnError::ClearanceAboveStated { requested, stated } if requested == 0.05 && stated == 0.04)
+    );
+    let own = learn_with(&stated, LearnConfig::default()).expect("learns with its own r_d");
+    assert_eq!(own.clearance_demo, 0.04);
+    let wider = learn_with(&ds, LearnConfig::default()).expect("learns with r_d = 0.05");
+    assert_eq!(wider.clearance_demo, 0.05);
+    // The workspace own learned is Ω+ dilated by 10 mm: never deeper than the brute-force
+    // distance to the demonstrated spheres grown by 10 mm, where the r_d = 0.05 one (20 mm) is.
+    let t = own
+        .location_types
+        .iter()
+        .position(|l| l.field.is_some())
+        .expect("a workspace");
+    let name = &own.location_types[t].name;
+    let mut sweep = Sweep::default();
+    for d in &ds.demonstrations {
+        for (ti, base, path) in arm_instances(f, d) {
+            if f.knowledge.location_types[ti].name == *name {
+                sweep.add_path(&f.model, &base, &path, own.config.workspace.resample);
+            }
+        }
+    }
+    let own_field = own.location_types[t].field.as_ref().unwrap().field();
+    let wider_field = wider.location_types[t].field.as_ref().unwrap().field();
+    let mut rng = StdRng::seed_from_u64(23);
+    let mut deeper = 0.0f64;
+    for _ in 0..1000 {
+        let s = &sweep.spheres[rng.random_range(0..sweep.spheres.len())];
+        let x = s.centre + Vector3::from_fn(|_, _| rng.random_range(-0.15..0.15));
+        let reference = brute(&sweep, 0.010, &x);
+        assert!(
+            own_field.distance(&x) >= reference - 1e-9,
+            "deeper than a 10 mm dilation at {x:?}"
+        );
+        deeper = deeper.max(reference - wider_field.distance(&x));
+    }
+    assert!(deeper > 0.005, "the 20 mm workspace is deeper by {deeper}");
+    let report = prf_learn::report(&compile(&own).expect("compile")).expect("report");
+    assert!(
+        report.contains("r_d = 40 mm, r = 30 mm (ε = 10 mm)"),
+        "{report}"
+    );
 }

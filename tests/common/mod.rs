@@ -21,6 +21,7 @@ pub fn dir() -> &'static Path {
 /// The blob learned from the paper's two diverse demonstrations of the example cell (Part1
 /// CNC → Printer, Part2 Printer → Table), written once into [`dir`]: all 18 tasks are
 /// feasible on it.
+#[allow(dead_code)] // not every test binary that shares this module needs a blob
 pub fn blob() -> &'static Path {
     static BLOB: OnceLock<PathBuf> = OnceLock::new();
     BLOB.get_or_init(|| {

@@ -49,6 +49,10 @@ pub struct Manifest {
     pub description: Option<String>,
     /// Nominal sample rate of the trajectories, Hz (informative; `t` is authoritative).
     pub rate_hz: f64,
+    /// r_d, m: the clearance every program keeps from every obstacle and the floor (Sec. 4.1),
+    /// a fact about the cell that learning needs and never guesses.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clearance_demo_m: Option<f64>,
     pub parts: Vec<Instance>,
     pub locations: Vec<Instance>,
     pub demonstrations: Vec<Entry>,
@@ -94,6 +98,8 @@ pub struct Dataset {
     pub robot: String,
     pub description: Option<String>,
     pub rate_hz: f64,
+    /// r_d, m, as the manifest states it (`clearance_demo_m`); None when it does not.
+    pub clearance_demo: Option<f64>,
     pub parts: Vec<Instance>,
     pub locations: Vec<Instance>,
     pub demonstrations: Vec<Demonstration>,
@@ -107,6 +113,8 @@ pub enum ErrorKind {
     /// Malformed JSON or a missing/unknown field.
     Json(String),
     BadFormat(String),
+    /// `clearance_demo_m` is not a positive number of metres.
+    BadClearance(f64),
     Duplicate(String),
     UnknownPart(String),
     UnknownLocation(String),
@@ -172,6 +180,10 @@ impl fmt::Display for DatasetError {
             ErrorKind::Io(e) => write!(f, "cannot read: {e}"),
             ErrorKind::Json(e) => write!(f, "invalid JSON: {e}"),
             ErrorKind::BadFormat(e) => write!(f, "{e}"),
+            ErrorKind::BadClearance(v) => write!(
+                f,
+                "clearance_demo_m = {v} is not a clearance: r_d is a positive number of metres"
+            ),
             ErrorKind::Duplicate(id) => write!(f, "duplicate id {id:?}"),
             ErrorKind::UnknownPart(id) => write!(f, "unknown part id {id:?} (not in the manifest)"),
             ErrorKind::UnknownLocation(id) => {
@@ -266,6 +278,15 @@ impl Dataset {
                 )),
             ));
         }
+        if let Some(r_d) = manifest.clearance_demo_m
+            && !(r_d > 0.0 && r_d.is_finite())
+        {
+            return Err(err(
+                &mpath,
+                line_of(&mtext, "\"clearance_demo_m\""),
+                ErrorKind::BadClearance(r_d),
+            ));
+        }
         let ids = manifest
             .parts
             .iter()
@@ -293,6 +314,7 @@ impl Dataset {
             robot: manifest.robot,
             description: manifest.description,
             rate_hz: manifest.rate_hz,
+            clearance_demo: manifest.clearance_demo_m,
             parts: manifest.parts,
             locations: manifest.locations,
             demonstrations,
@@ -322,6 +344,7 @@ impl Dataset {
             robot: self.robot.clone(),
             description: self.description.clone(),
             rate_hz: self.rate_hz,
+            clearance_demo_m: self.clearance_demo,
             parts: self.parts.clone(),
             locations: self.locations.clone(),
             demonstrations: entries,

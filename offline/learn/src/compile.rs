@@ -172,7 +172,7 @@ pub fn compile(k: &Knowledge) -> Result<Vec<u8>, CompileError> {
     ];
     let payload = Payload {
         description: &k.description,
-        clearance_demo: k.config.clearance_demo,
+        clearance_demo: k.clearance_demo,
         clearance_acceptable: k.config.clearance_acceptable,
         robot: RobotData::from_model(&k.robot),
         classes: tables[0].table(),

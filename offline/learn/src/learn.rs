@@ -18,9 +18,10 @@ use std::time::Instant;
 /// Settings of Learn.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LearnConfig {
-    /// Clearance the programs were made with, r_d, and the true acceptable clearance r, m:
-    /// the workspaces are dilated by ε = r_d − r.
-    pub clearance_demo: f64,
+    /// r_d to learn with, m: None takes the dataset's stated r_d; a value must not exceed it
+    /// (a smaller one is more conservative). The workspaces are dilated by ε = r_d − r.
+    pub clearance_demo: Option<f64>,
+    /// The true acceptable clearance r, m.
     pub clearance_acceptable: f64,
     pub workspace: WorkspaceConfig,
     pub dmp: DmpParams,
@@ -32,7 +33,7 @@ pub struct LearnConfig {
 impl Default for LearnConfig {
     fn default() -> Self {
         LearnConfig {
-            clearance_demo: 0.05,
+            clearance_demo: None,
             clearance_acceptable: 0.03,
             workspace: WorkspaceConfig::default(),
             // 30 bases reproduce these 2.6–4.1 s motions; 40 would cost 26 KiB more blob.
@@ -71,6 +72,8 @@ pub struct Knowledge {
     pub robot: RobotModel,
     pub description: String,
     pub config: LearnConfig,
+    /// The r_d learned with, m (the dataset's, or a smaller one asked for).
+    pub clearance_demo: f64,
     pub location_types: Vec<LocationTypeKnowledge>,
     pub part_types: Vec<PartTypeKnowledge>,
     pub arms: Vec<ArmSkill>,
@@ -107,6 +110,14 @@ pub enum LearnError {
         "the acceptable clearance r = {acceptable} m exceeds the programs' clearance r_d = {demo} m"
     )]
     Clearance { acceptable: f64, demo: f64 },
+    #[error(
+        "the dataset does not state r_d, the clearance its programs kept from every obstacle: add \"clearance_demo_m\" (metres) to its manifest.json. Learning dilates the workspaces by ε = r_d − r, and an r_d larger than the programs kept makes risk 0 unsafe, so it is never guessed (check it with `prf check-dataset --world`)"
+    )]
+    NoClearance,
+    #[error(
+        "r_d = {requested} m is larger than the dataset's stated r_d = {stated} m: ε = r_d − r would exceed what the programs kept, and risk 0 would no longer guarantee clearance r (a smaller r_d is allowed)"
+    )]
+    ClearanceAboveStated { requested: f64, stated: f64 },
     #[error("demonstration {demonstration}: the {what} pose is not a valid pose")]
     BadPose {
         demonstration: String,
@@ -266,6 +277,19 @@ pub fn part_kinds(ds: &Dataset) -> Vec<String> {
     v
 }
 
+/// The r_d to learn with (Sec. 4.1): the dataset's `stated` one, or a `requested` one no
+/// larger. A dataset that does not state it is refused.
+pub fn clearance_demo(stated: Option<f64>, requested: Option<f64>) -> Result<f64, LearnError> {
+    let stated = stated.ok_or(LearnError::NoClearance)?;
+    match requested {
+        Some(requested) if requested > stated => {
+            Err(LearnError::ClearanceAboveStated { requested, stated })
+        }
+        Some(requested) => Ok(requested),
+        None => Ok(stated),
+    }
+}
+
 /// Learn (Alg. 3) on a dataset read for `model`.
 pub fn learn(
     ds: &Dataset,
@@ -273,12 +297,13 @@ pub fn learn(
     cfg: &LearnConfig,
     progress: OnProgress<'_>,
 ) -> Result<Knowledge, LearnError> {
+    let clearance_demo = clearance_demo(ds.clearance_demo, cfg.clearance_demo)?;
     let mut wc = cfg.workspace;
-    wc.epsilon = cfg.clearance_demo - cfg.clearance_acceptable;
+    wc.epsilon = clearance_demo - cfg.clearance_acceptable;
     if !(wc.epsilon >= 0.0) {
         return Err(LearnError::Clearance {
             acceptable: cfg.clearance_acceptable,
-            demo: cfg.clearance_demo,
+            demo: clearance_demo,
         });
     }
     progress(Progress::Total(
@@ -394,6 +419,7 @@ pub fn learn(
         robot: model.clone(),
         description: ds.description.clone().unwrap_or_default(),
         config,
+        clearance_demo,
         location_types,
         part_types,
         arms,

@@ -78,13 +78,22 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .collect();
     bar.finish();
     let c = world.clearance;
+    // The r_d the programs are checked against: the one the dataset states (what learning
+    // will use), else the world's.
+    let (r_d, whose) = match dataset.clearance_demo {
+        Some(v) => (v, "stated by the dataset"),
+        None => (
+            c.demonstration,
+            "the world's; the dataset states none, and `prf learn` will refuse it",
+        ),
+    };
     println!(
         "{:<6} {:>7} {:>12} {:>10} {:>8} {:>8}  closest obstacle",
         "demo", "T [s]", "clear. [mm]", "self [mm]", "v/vmax", "a/amax"
     );
     let mut failed = 0;
     for (d, r) in dataset.demonstrations.iter().zip(&reports) {
-        let ok = r.ok(c.demonstration, c.self_collision, validate::LIMIT_TOLERANCE);
+        let ok = r.ok(r_d, c.self_collision, validate::LIMIT_TOLERANCE);
         failed += usize::from(!ok);
         let contact = format!("{:?}", r.world_contact);
         println!(
@@ -116,10 +125,27 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let configurations: usize = reports.iter().map(|r| r.configurations).sum();
     println!(
-        "{configurations} configurations checked; r_d = {:.0} mm, self clearance = {:.0} mm",
-        c.demonstration * 1e3,
+        "{configurations} configurations checked; r_d = {:.0} mm ({whose}), self clearance = {:.0} mm",
+        r_d * 1e3,
         c.self_collision * 1e3
     );
+    if let Some((d, kept)) = dataset
+        .demonstrations
+        .iter()
+        .zip(&reports)
+        .map(|(d, r)| (&d.id, r.min_world))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+    {
+        println!("smallest clearance kept: {:.1} mm ({d})", kept * 1e3);
+        if dataset.clearance_demo.is_some() && kept < r_d {
+            bail!(
+                "the dataset states r_d = {:.1} mm, but {d} keeps only {:.1} mm: a stated r_d larger than the programs kept makes risk 0 unsafe; state at most {:.1} mm in manifest.json (clearance_demo_m)",
+                r_d * 1e3,
+                kept * 1e3,
+                (kept * 1e4).floor() / 10.0
+            );
+        }
+    }
     if failed > 0 {
         bail!("{failed} demonstrations violate the ground truth");
     }

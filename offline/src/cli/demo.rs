@@ -104,12 +104,17 @@ fn dataset(
     let marker = ds_dir.join(".complete");
     if marker.exists() && !regenerate {
         let ds = Dataset::read(&ds_dir, model)?;
+        if ds.clearance_demo.is_some() {
+            println!(
+                "dataset: {} demonstrations cached in {} (--regenerate to make them again)",
+                ds.demonstrations.len(),
+                ds_dir.display()
+            );
+            return Ok(ds);
+        }
         println!(
-            "dataset: {} demonstrations cached in {} (--regenerate to make them again)",
-            ds.demonstrations.len(),
-            ds_dir.display()
+            "dataset: the cached one does not state r_d (an older format); generating it again"
         );
-        return Ok(ds);
     }
     let t0 = Instant::now();
     let afforded = world.afforded_tasks();

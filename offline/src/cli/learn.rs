@@ -21,9 +21,10 @@ pub struct Args {
     /// Collision-sphere file for --urdf (offline/data/kmr_iiwa14.spheres.json format).
     #[arg(long, requires = "urdf")]
     pub spheres: Option<PathBuf>,
-    /// Clearance the programs were made with, r_d, m.
-    #[arg(long, default_value_t = 0.05)]
-    pub clearance_demo: f64,
+    /// r_d, m: by default the dataset's stated clearance (manifest `clearance_demo_m`); a
+    /// smaller value is more conservative, a larger one is refused.
+    #[arg(long)]
+    pub clearance_demo: Option<f64>,
     /// True acceptable clearance r, m (workspaces are dilated by ε = r_d − r).
     #[arg(long, default_value_t = 0.03)]
     pub clearance: f64,

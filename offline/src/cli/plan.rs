@@ -37,6 +37,32 @@ pub struct Args {
     /// A task is physically feasible when J* is at most this risk, m.
     #[arg(long, default_value_t = 0.0)]
     pub threshold: f64,
+    /// The clearance the plan must guarantee, m; refused when stricter than the blob's r (what
+    /// a risk-0 plan guarantees).
+    #[arg(long)]
+    pub clearance: Option<f64>,
+}
+
+/// What a risk-0 plan on this blob guarantees (Sec. 4.1): every sphere inside Ω+ is within
+/// ε = r_d − r of a demonstrated one, so it keeps r from whatever the programs kept r_d from.
+/// Refuses a `required` clearance stricter than r.
+fn clearance_guarantee(rt: &Runtime<'_>, required: Option<f64>) -> anyhow::Result<()> {
+    let p = &rt.blob.payload;
+    let (r_d, r) = (p.clearance_demo, p.clearance_acceptable);
+    println!(
+        "clearance: a risk-0 plan keeps ≥ r = {:.0} mm from every obstacle the programs kept r_d = {:.0} mm from (workspaces dilated by ε = {:.0} mm)",
+        r * 1e3,
+        r_d * 1e3,
+        (r_d - r) * 1e3
+    );
+    match required {
+        Some(c) if !(c <= r) => bail!(
+            "--clearance {:.0} mm is stricter than the {:.0} mm this blob guarantees at risk 0: learn it again with --clearance {c} (needs r_d ≥ {c} m)",
+            c * 1e3,
+            r * 1e3
+        ),
+        _ => Ok(()),
+    }
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
@@ -56,6 +82,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         load.as_secs_f64() * 1e6,
         std::mem::size_of::<Runtime>()
     );
+    clearance_guarantee(&rt, a.clearance)?;
     if a.all {
         return plan_all(&rt, &world);
     }

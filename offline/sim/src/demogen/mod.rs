@@ -82,6 +82,7 @@ pub fn generate_dataset(
             world.source.display()
         )),
         rate_hz,
+        clearance_demo: Some(world.clearance.demonstration),
         parts: world
             .parts
             .iter()
