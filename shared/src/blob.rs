@@ -282,13 +282,7 @@ impl RobotData {
     /// The model, validated.
     pub fn to_model(&self) -> Result<RobotModel, BlobError> {
         let pose = |a: [f64; 7]| pose_from_array(a).ok_or(BlobError::Model(ModelError::Transform));
-        let mut joints = [Joint {
-            origin: Pose::identity(),
-            axis: Vector3::z_axis(),
-            lower: 0.0,
-            upper: 0.0,
-            max_speed: 0.0,
-        }; NA];
+        let mut joints = [Joint::unset(); NA];
         for (i, (j, d)) in joints.iter_mut().zip(&self.joints).enumerate() {
             let bad = BlobError::Model(ModelError::Joint { joint: i });
             let axis = Vector3::from(d.axis);

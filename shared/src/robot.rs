@@ -80,6 +80,19 @@ pub struct Joint {
     pub max_speed: f64,
 }
 
+impl Joint {
+    /// A placeholder to fill in (identity origin, z axis, zero limits): not a valid joint.
+    pub fn unset() -> Joint {
+        Joint {
+            origin: Pose::identity(),
+            axis: Vector3::z_axis(),
+            lower: 0.0,
+            upper: 0.0,
+            max_speed: 0.0,
+        }
+    }
+}
+
 /// A collision sphere rigidly attached to one frame (see [`LINK_ARM_BASE`], [`LINK_TOOL`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {

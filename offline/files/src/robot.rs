@@ -159,13 +159,7 @@ pub fn parse(
     let tcp = to_tcp
         .iter()
         .fold(Pose::identity(), |p, j| p * pose(&j.origin));
-    let mut joints = [Joint {
-        origin: Pose::identity(),
-        axis: Vector3::z_axis(),
-        lower: 0.0,
-        upper: 0.0,
-        max_speed: 0.0,
-    }; NA];
+    let mut joints = [Joint::unset(); NA];
     for (slot, &i) in joints.iter_mut().zip(&revolute) {
         let j = chain[i];
         let axis = Vector3::from(j.axis.xyz.0);
