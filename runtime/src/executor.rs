@@ -31,7 +31,7 @@ pub struct ExecutorConfig {
     pub gripper_timeout: Duration,
     /// Longest wait for the platform to reach a goal.
     pub base_timeout: Duration,
-    /// The platform has arrived within this distance, m, and yaw, rad.
+    /// The platform has arrived within this distance, m.
     pub base_position_tolerance: f64,
     /// The platform has arrived within this yaw, rad.
     pub base_yaw_tolerance: f64,
@@ -83,21 +83,6 @@ pub enum Mode {
     Done = 3,
     /// Stopped by a fault; holding the last safe setpoint.
     Fault = 4,
-}
-
-impl Mode {
-    /// The mode of an encoded value, None for a value no mode has.
-    pub fn from_u8(v: u8) -> Option<Mode> {
-        [
-            Mode::Base,
-            Mode::Arm,
-            Mode::Gripper,
-            Mode::Done,
-            Mode::Fault,
-        ]
-        .get(v as usize)
-        .copied()
-    }
 }
 
 /// One setpoint, once per tick.

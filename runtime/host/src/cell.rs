@@ -169,9 +169,11 @@ impl Timing {
     const CAP: usize = 600_000;
 
     fn new() -> Self {
+        // A non-zero fill writes every page now; a zero fill would come from calloc as
+        // untouched pages, each faulting in on its first sample inside the loop.
         Timing {
-            late: vec![0.0; Self::CAP],
-            latency: vec![0.0; Self::CAP],
+            late: vec![-1.0; Self::CAP],
+            latency: vec![-1.0; Self::CAP],
             n_late: 0,
             n_latency: 0,
         }
