@@ -1,9 +1,8 @@
-//! The cell-controller firmware seen from the host: build it and run it under QEMU with a blob
+//! The cell-controller firmware seen from the host (errors: [`FirmwareError`]): build it and run it under QEMU with a blob
 //! and a task block (both through `scripts/firmware.sh`, the one home of the QEMU command
 //! line), read the figures record and the setpoint stream it writes, and compare that stream
 //! with the host runtime's for the same blob and task block.
 
-use anyhow::{Context, bail};
 use prf_host::ideal::execute;
 use prf_runtime::executor::{ExecutorConfig, Mode, Setpoint};
 pub use prf_runtime::figures::Figures;
@@ -26,6 +25,50 @@ pub const STREAM_TOLERANCE: f64 = 1e-9;
 /// Ticks the host reference runs at most (an hour at 1 kHz).
 const MAX_TICKS: usize = 3_600_000;
 
+/// Why the firmware could not be built, run or compared.
+#[derive(Debug, thiserror::Error)]
+pub enum FirmwareError {
+    #[error("running {what}")]
+    Spawn {
+        what: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{what} failed ({status}):\n{stderr}")]
+    Script {
+        what: String,
+        status: std::process::ExitStatus,
+        stderr: String,
+    },
+    #[error("{what} printed no path")]
+    NoPath { what: String },
+    #[error("{action} {path}")]
+    File {
+        action: &'static str,
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: {len} bytes is not a whole number of {RECORD_LEN}-byte records")]
+    Stream { path: PathBuf, len: usize },
+    #[error("loading the blob: {0}")]
+    Load(prf_runtime::LoadError),
+    #[error("decoding the task block: {0}")]
+    TaskBlock(task_block::TaskBlockError),
+    #[error(transparent)]
+    FloorTask(#[from] prf_sim::tasks::FloorTaskError),
+    /// Planning failed (the message of the borrowing `PlanError`).
+    #[error("plan: {0}")]
+    Plan(String),
+    #[error("the task has no program")]
+    NoProgram,
+    #[error("the host executor stopped: {0}")]
+    HostFault(prf_runtime::executor::Fault),
+}
+
+/// The result of a firmware operation.
+pub type Result<T> = std::result::Result<T, FirmwareError>;
+
 fn repository() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
@@ -36,29 +79,32 @@ fn script() -> PathBuf {
 
 /// Runs `scripts/firmware.sh` with `args` (a subcommand that builds): the ELF path it prints
 /// last.
-fn built_elf(args: &[&std::ffi::OsStr]) -> anyhow::Result<PathBuf> {
+fn built_elf(args: &[&std::ffi::OsStr]) -> Result<PathBuf> {
     let what = format!("scripts/firmware.sh {}", args[0].to_string_lossy());
     let out = Command::new("bash")
         .arg(script())
         .args(args)
         .output()
-        .with_context(|| format!("running {what}"))?;
+        .map_err(|source| FirmwareError::Spawn {
+            what: what.clone(),
+            source,
+        })?;
     if !out.status.success() {
-        bail!(
-            "{what} failed ({}):\n{}",
-            out.status,
-            String::from_utf8_lossy(&out.stderr)
-        );
+        return Err(FirmwareError::Script {
+            what,
+            status: out.status,
+            stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+        });
     }
     let stdout = String::from_utf8_lossy(&out.stdout);
     let Some(elf) = stdout.lines().last() else {
-        bail!("{what} printed no path");
+        return Err(FirmwareError::NoPath { what });
     };
     Ok(repository().join(elf.trim()))
 }
 
 /// Builds the firmware (installing the toolchain and QEMU when missing); the ELF's path.
-pub fn build() -> anyhow::Result<PathBuf> {
+pub fn build() -> Result<PathBuf> {
     built_elf(&["build".as_ref()])
 }
 
@@ -76,7 +122,7 @@ pub struct Run {
 /// `--task FILE` flash them into their regions, `--stream FILE` has every setpoint written
 /// there, `--fault-test` executes an undefined instruction. The firmware's figures come back
 /// as a record in a file of their own (`--figures`).
-pub fn run<I, S>(elf: &Path, args: I) -> anyhow::Result<Run>
+pub fn run<I, S>(elf: &Path, args: I) -> Result<Run>
 where
     I: IntoIterator<Item = S>,
     S: AsRef<std::ffi::OsStr>,
@@ -94,7 +140,10 @@ where
         .arg("--figures")
         .arg(&figures_path)
         .output()
-        .context("running scripts/firmware.sh run-image")?;
+        .map_err(|source| FirmwareError::Spawn {
+            what: "scripts/firmware.sh run-image".into(),
+            source,
+        })?;
     let figures = std::fs::read(&figures_path)
         .ok()
         .and_then(|b| Figures::decode(&b));
@@ -108,19 +157,18 @@ where
 
 /// Builds the self-contained image with `blob` and `task` linked in (feature `embed`); its
 /// path.
-pub fn image(blob: &Path, task: &Path) -> anyhow::Result<PathBuf> {
+pub fn image(blob: &Path, task: &Path) -> Result<PathBuf> {
     built_elf(&["image".as_ref(), blob.as_os_str(), task.as_os_str()])
 }
 
 /// Reads a setpoint stream the firmware wrote.
-pub fn read_stream(path: &Path) -> anyhow::Result<Vec<Record>> {
-    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    if bytes.len() % RECORD_LEN != 0 {
-        bail!(
-            "{}: {} bytes is not a whole number of {RECORD_LEN}-byte records",
-            path.display(),
-            bytes.len()
-        );
+pub fn read_stream(path: &Path) -> Result<Vec<Record>> {
+    let bytes = read(path)?;
+    if !bytes.len().is_multiple_of(RECORD_LEN) {
+        return Err(FirmwareError::Stream {
+            path: path.to_path_buf(),
+            len: bytes.len(),
+        });
     }
     Ok(bytes
         .chunks_exact(RECORD_LEN)
@@ -130,12 +178,12 @@ pub fn read_stream(path: &Path) -> anyhow::Result<Vec<Record>> {
 
 /// The host runtime's setpoints for the task in `block` on blob `blob`: the firmware's
 /// computation (plan, then the executor against the ideal cell), run here.
-pub fn host_stream(blob: &[u8], block: &[u8]) -> anyhow::Result<Vec<Setpoint>> {
-    let rt = Runtime::load(blob).context("loading the blob")?;
-    let task = task_block::decode(block).context("decoding the task block")?;
-    let p = plan(&rt, &task).map_err(|e| anyhow::anyhow!("plan: {e}"))?;
+pub fn host_stream(blob: &[u8], block: &[u8]) -> Result<Vec<Setpoint>> {
+    let rt = Runtime::load(blob).map_err(FirmwareError::Load)?;
+    let task = task_block::decode(block).map_err(FirmwareError::TaskBlock)?;
+    let p = plan(&rt, &task).map_err(|e| FirmwareError::Plan(e.to_string()))?;
     let Some(program) = p.program else {
-        bail!("the task has no program");
+        return Err(FirmwareError::NoProgram);
     };
     let run = execute(
         &rt,
@@ -145,9 +193,18 @@ pub fn host_stream(blob: &[u8], block: &[u8]) -> anyhow::Result<Vec<Setpoint>> {
         MAX_TICKS,
     );
     if let Some(f) = run.fault {
-        bail!("the host executor stopped: {f}");
+        return Err(FirmwareError::HostFault(f));
     }
     Ok(run.setpoints)
+}
+
+/// The bytes of a file.
+fn read(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|source| FirmwareError::File {
+        action: "reading",
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// How far two setpoint streams are apart.
@@ -163,7 +220,7 @@ pub struct Comparison {
 /// Compares the firmware's stream with the host's: the same length, sequence numbers,
 /// modes, segments and gripper commands, and numbers within [`STREAM_TOLERANCE`]. The error
 /// names the first setpoint that differs.
-pub fn compare(host: &[Setpoint], firmware: &[Record]) -> Result<Comparison, String> {
+pub fn compare(host: &[Setpoint], firmware: &[Record]) -> std::result::Result<Comparison, String> {
     if host.len() != firmware.len() {
         return Err(format!(
             "{} firmware setpoints, {} host setpoints",
@@ -246,17 +303,12 @@ pub struct TaskReport {
     pub label: String,
     pub run: Run,
     /// The streams compared (Err: why they differ, or why there is no firmware stream).
-    pub comparison: Result<Comparison, String>,
+    pub comparison: std::result::Result<Comparison, String>,
 }
 
 /// Runs task `task` on the firmware with blob `blob` (task block and stream written into
 /// `dir`) and compares its stream with the host's.
-pub fn check_task(
-    elf: &Path,
-    blob: &Path,
-    task: &FloorTask,
-    dir: &Path,
-) -> anyhow::Result<TaskReport> {
+pub fn check_task(elf: &Path, blob: &Path, task: &FloorTask, dir: &Path) -> Result<TaskReport> {
     let name: String = task
         .label()
         .chars()
@@ -265,8 +317,11 @@ pub fn check_task(
     let block_path = dir.join(format!("{name}.task"));
     let stream_path = dir.join(format!("{name}.stream"));
     let block = task.task_block()?;
-    std::fs::write(&block_path, &block)
-        .with_context(|| format!("writing {}", block_path.display()))?;
+    std::fs::write(&block_path, &block).map_err(|source| FirmwareError::File {
+        action: "writing",
+        path: block_path.clone(),
+        source,
+    })?;
     let _ = std::fs::remove_file(&stream_path);
     let args = [
         "--blob".as_ref(),
@@ -277,12 +332,15 @@ pub fn check_task(
         stream_path.as_os_str(),
     ];
     let run = run(elf, args)?;
-    let bytes = std::fs::read(blob).with_context(|| format!("reading {}", blob.display()))?;
+    let bytes = read(blob)?;
     let host = host_stream(&bytes, &block)?;
     let comparison = match (run.status, read_stream(&stream_path)) {
         (Some(0), Ok(fw)) => compare(&host, &fw),
         (status, Ok(_)) => Err(format!("the firmware exited with {status:?}")),
-        (_, Err(e)) => Err(format!("{e:#}")),
+        (_, Err(e)) => Err(match std::error::Error::source(&e) {
+            Some(cause) => format!("{e}: {cause}"),
+            None => e.to_string(),
+        }),
     };
     Ok(TaskReport {
         label: task.label(),
@@ -299,10 +357,10 @@ pub fn check_tasks(
     tasks: &[FloorTask],
     dir: &Path,
     workers: usize,
-    done: impl Fn(&anyhow::Result<TaskReport>) + Sync,
-) -> Vec<anyhow::Result<TaskReport>> {
+    done: impl Fn(&Result<TaskReport>) + Sync,
+) -> Vec<Result<TaskReport>> {
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let slots: Vec<std::sync::Mutex<Option<anyhow::Result<TaskReport>>>> =
+    let slots: Vec<std::sync::Mutex<Option<Result<TaskReport>>>> =
         tasks.iter().map(|_| std::sync::Mutex::new(None)).collect();
     std::thread::scope(|s| {
         for _ in 0..workers.max(1) {
