@@ -91,7 +91,9 @@ fn r_d_is_stated_checked_and_never_guessed() {
     assert!(out.status.success(), "{}", text(&out));
     let out = prf(&["inspect", blob_s]);
     assert!(
-        text(&out).contains("r_d = 40 mm, r = 30 mm (ε = 10 mm)"),
+        text(&out).contains(
+            "(≥ 2 mm beyond the link surfaces); clearances r_d = 40 mm, r = 30 mm (ε = 10 mm)"
+        ),
         "{}",
         text(&out)
     );

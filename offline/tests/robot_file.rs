@@ -66,3 +66,20 @@ fn robot_file_errors_name_the_file_and_line() {
     let no_joint = robot::EXAMPLE_URDF.replace("type=\"revolute\"", "type=\"fixed\"");
     assert!(robot::parse(&no_joint, "r.urdf", robot::EXAMPLE_SPHERES, "s.json").is_err());
 }
+
+/// The sphere file states its fit margin; the model carries it (the blob and `prf inspect`
+/// show it) and refuses a negative one.
+#[test]
+fn the_sphere_margin_is_read_and_checked() {
+    let urdf = robot::example().expect("shipped files");
+    assert_eq!(urdf.sphere_margin, 0.002);
+    assert_eq!(urdf.sphere_margin, RobotModel::kmr_iiwa14().sphere_margin);
+    let negative = robot::EXAMPLE_SPHERES.replace("\"margin_m\": 0.002", "\"margin_m\": -0.001");
+    let e = robot::parse(robot::EXAMPLE_URDF, "r.urdf", &negative, "s.json")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sphere margin"), "{e}");
+    let unstated = robot::EXAMPLE_SPHERES.replace("  \"margin_m\": 0.002,\n", "");
+    let m = robot::parse(robot::EXAMPLE_URDF, "r.urdf", &unstated, "s.json").expect("optional");
+    assert_eq!(m.sphere_margin, 0.0);
+}

@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 /// Magic at the start of every blob.
 pub const MAGIC: [u8; 8] = *b"PRFBLOB\0";
 /// Format version this build reads and writes.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// Header bytes: magic (8), version (4), payload length (4), CRC-32 (4), reserved (4).
 pub const HEADER_LEN: usize = 24;
 /// Maximum affordances (stances of a location type, grasps of a part type).
@@ -247,6 +247,8 @@ pub struct RobotData {
     pub platform_half: [f64; 3],
     /// Home configuration q_a,H, rad.
     pub home: [f64; NA],
+    /// How far at least every sphere reaches beyond its link's surface, m.
+    pub sphere_margin: f64,
 }
 
 impl RobotData {
@@ -276,6 +278,7 @@ impl RobotData {
             platform_centre: m.platform.centre.into(),
             platform_half: m.platform.half_extents.into(),
             home: m.home,
+            sphere_margin: m.sphere_margin,
         }
     }
 
@@ -316,6 +319,7 @@ impl RobotData {
                 half_extents: Vector3::from(self.platform_half),
             },
             home: self.home,
+            sphere_margin: self.sphere_margin,
         };
         m.validate().map_err(BlobError::Model)?;
         Ok(m)

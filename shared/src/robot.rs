@@ -34,6 +34,8 @@ pub enum ModelError {
         /// The sphere's index.
         index: usize,
     },
+    /// The sphere margin is negative or not finite.
+    SphereMargin,
     /// The home configuration is outside the limits of `joint`.
     Home {
         /// The joint, 0-based.
@@ -54,6 +56,9 @@ impl core::fmt::Display for ModelError {
                 f,
                 "collision sphere {index} names no frame of the robot or has a bad centre or radius"
             ),
+            ModelError::SphereMargin => {
+                write!(f, "the sphere margin is negative or not finite")
+            }
             ModelError::Home { joint } => write!(
                 f,
                 "the home configuration is outside the limits of joint A{}",
@@ -131,6 +136,9 @@ pub struct RobotModel {
     pub platform: PlatformBox,
     /// Home configuration q_a,H of the arm.
     pub home: [f64; NA],
+    /// How far at least every sphere reaches beyond the link surface it covers, m (the
+    /// fit's margin; 0 when the robot file does not state it).
+    pub sphere_margin: f64,
 }
 
 /// LBR iiwa 14 R820 joint origins (URDF: xyz, rpy), all axes z.
@@ -149,6 +157,9 @@ const IIWA14_JOINTS: [([f64; 3], [f64; 3]); NA] = {
 /// Position limits ±deg and speed limits deg/s of the iiwa 14 R820.
 const IIWA14_LIMIT_DEG: [f64; NA] = [170.0, 120.0, 170.0, 120.0, 170.0, 120.0, 175.0];
 const IIWA14_SPEED_DEG: [f64; NA] = [85.0, 85.0, 100.0, 75.0, 130.0, 135.0, 135.0];
+
+/// The margin `tools/fit_spheres.py` adds to every fitted radius, m.
+const IIWA14_SPHERE_MARGIN: f64 = 0.002;
 
 /// Collision spheres (frame, centre, radius), m. Links 0..=7 were fitted to the iiwa 14 STL
 /// meshes by `tools/fit_spheres.py` (every triangle inside one sphere, 2 mm margin; verified by
@@ -213,6 +224,7 @@ impl RobotModel {
                 half_extents: Vector3::new(0.54, 0.315, 0.35),
             },
             home: home_deg.map(|d: f64| d.to_radians()),
+            sphere_margin: IIWA14_SPHERE_MARGIN,
         }
     }
 
@@ -238,6 +250,9 @@ impl RobotModel {
         }
         if !(finite_pose(&self.mount) && finite_pose(&self.flange) && finite_pose(&self.tcp)) {
             return Err(ModelError::Transform);
+        }
+        if !(self.sphere_margin >= 0.0 && self.sphere_margin.is_finite()) {
+            return Err(ModelError::SphereMargin);
         }
         for (i, s) in self.spheres.iter().enumerate() {
             let ok = (s.link as usize) < N_FRAMES

@@ -29,6 +29,9 @@ struct SphereFile {
     #[allow(dead_code)]
     comment: Option<String>,
     home_deg: [f64; NA],
+    /// How far at least every sphere reaches beyond its link's surface, m (optional).
+    #[serde(default)]
+    margin_m: Option<f64>,
     spheres: Vec<SphereEntry>,
 }
 
@@ -244,6 +247,7 @@ pub fn parse(
         spheres: list,
         platform,
         home: file.home_deg.map(|d| d.to_radians()),
+        sphere_margin: file.margin_m.unwrap_or(0.0),
     };
     model.validate().map_err(|error| RobotFileError::Model {
         urdf: urdf_name.to_string(),

@@ -53,8 +53,9 @@ pub fn report(bytes: &[u8]) -> Result<String, ReportError> {
     }
     writeln!(
         o,
-        "robot: 7-axis arm, {} collision spheres; clearances r_d = {} mm, r = {} mm (ε = {} mm)",
+        "robot: 7-axis arm, {} collision spheres (≥ {} mm beyond the link surfaces); clearances r_d = {} mm, r = {} mm (ε = {} mm)",
         robot.spheres.len(),
+        robot.sphere_margin * 1e3,
         p.clearance_demo * 1e3,
         p.clearance_acceptable * 1e3,
         ((p.clearance_demo - p.clearance_acceptable) * 1e3).round()
