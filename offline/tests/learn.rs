@@ -11,7 +11,7 @@ use prf_learn::compile;
 use prf_learn::workspace::Sweep;
 use prf_learn::{Knowledge, LearnConfig, LearnError, affordance, learn};
 use prf_shared::JointVector;
-use prf_shared::blob::{Blob, BlobError, HEADER_LEN, crc32};
+use prf_shared::blob::{Blob, BlobError, HEADER_LEN, VERSION, crc32};
 use prf_shared::field::{DistanceField, Field};
 use prf_shared::kinematics::{ArmKinematics, arm_base_pose};
 use prf_shared::motion::{CLASSES, TaskLocation};
@@ -379,12 +379,12 @@ fn corrupt_blobs_are_refused_with_their_own_error() {
     b[0] = b'X';
     assert_eq!(Blob::parse(&b).unwrap_err(), BlobError::BadMagic);
     let mut b = bytes.clone();
-    b[8..12].copy_from_slice(&3u32.to_le_bytes());
+    b[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
     assert_eq!(
         Blob::parse(&b).unwrap_err(),
         BlobError::Version {
-            found: 3,
-            supported: 2
+            found: VERSION + 1,
+            supported: VERSION
         }
     );
     let mut b = bytes.clone();
