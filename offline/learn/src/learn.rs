@@ -279,7 +279,10 @@ pub fn part_kinds(ds: &Dataset) -> Vec<String> {
 
 /// The r_d to learn with (Sec. 4.1): the dataset's `stated` one, or a `requested` one no
 /// larger. A dataset that does not state it is refused.
-pub fn clearance_demo(stated: Option<f64>, requested: Option<f64>) -> Result<f64, LearnError> {
+pub fn resolve_clearance_demo(
+    stated: Option<f64>,
+    requested: Option<f64>,
+) -> Result<f64, LearnError> {
     let stated = stated.ok_or(LearnError::NoClearance)?;
     match requested {
         Some(requested) if requested > stated => {
@@ -297,7 +300,7 @@ pub fn learn(
     cfg: &LearnConfig,
     progress: OnProgress<'_>,
 ) -> Result<Knowledge, LearnError> {
-    let clearance_demo = clearance_demo(ds.clearance_demo, cfg.clearance_demo)?;
+    let clearance_demo = resolve_clearance_demo(ds.clearance_demo, cfg.clearance_demo)?;
     let mut wc = cfg.workspace;
     wc.epsilon = clearance_demo - cfg.clearance_acceptable;
     if !(wc.epsilon >= 0.0) {

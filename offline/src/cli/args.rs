@@ -42,26 +42,22 @@ impl TaskArgs {
     }
 }
 
-/// The floor plan.
+/// The cell's world file.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct WorldArgs {
-    /// Floor plan (world file) with the location poses and the platform's home; default: the
-    /// built-in example cell.
+    /// World file (JSON: floor plan, location poses, the platform's home, obstacles, parts);
+    /// default: the built-in example cell.
     #[arg(long)]
     pub world: Option<PathBuf>,
 }
 
 impl WorldArgs {
+    /// Loads `--world`, or the built-in example.
     pub fn load(&self) -> anyhow::Result<World> {
-        load_world(&self.world)
-    }
-}
-
-/// Loads `--world` or the built-in example.
-pub fn load_world(path: &Option<PathBuf>) -> anyhow::Result<World> {
-    match path {
-        Some(p) => Ok(World::load(p)?),
-        None => Ok(World::example()),
+        match &self.world {
+            Some(p) => Ok(World::load(p)?),
+            None => Ok(World::example()),
+        }
     }
 }
 

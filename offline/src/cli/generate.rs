@@ -1,6 +1,6 @@
 //! `prf gen`: writes the demonstration dataset of a cell.
 
-use crate::cli::args::load_world;
+use crate::cli::args::WorldArgs;
 use crate::cli::progress::Bar;
 use anyhow::{Context, bail};
 use prf_shared::robot::RobotModel;
@@ -17,9 +17,8 @@ pub struct Args {
     /// Output directory.
     #[arg(short, long, default_value = "dataset")]
     pub output: PathBuf,
-    /// World file (JSON); default: the built-in example cell.
-    #[arg(long)]
-    pub world: Option<PathBuf>,
+    #[command(flatten)]
+    pub world: WorldArgs,
     /// Only these afforded tasks, by index (see --list), e.g. `0,5,10-12`.
     #[arg(long, conflicts_with = "random")]
     pub only: Option<String>,
@@ -63,7 +62,7 @@ fn parse_selection(s: &str, n: usize) -> anyhow::Result<Vec<usize>> {
 }
 
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let world = load_world(&args.world)?;
+    let world = args.world.load()?;
     let afforded = world.afforded_tasks();
     if args.list {
         use std::io::Write;
