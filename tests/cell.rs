@@ -212,6 +212,7 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
     );
     let (sp, js) = watch.finish();
     let r = report(&json);
+    let r_json = r.clone();
     assert_eq!(r["completed"], true, "{r}");
     assert_eq!(
         (r["lost"].as_u64(), r["repeated"].as_u64()),
@@ -222,7 +223,9 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
     let track = r["max_tracking_error"].as_f64().unwrap();
     assert!(track <= 1e-2, "tracking error {track} rad");
 
-    // The setpoints as the controller saw them: 1, 2, 3, … and within the limits.
+    // The setpoints as the controller saw them: 1, 2, 3, …, within the position, speed,
+    // acceleration and jerk limits (1 ms finite differences from and to standstill) and
+    // unchanged by the output stage.
     let model = RobotModel::kmr_iiwa14();
     let limits = MotionLimits::kmr_iiwa(&model);
     assert!(!sp.is_empty());
@@ -236,15 +239,23 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
                 s.seq,
                 j + 1
             );
-            if i > 0 {
-                let step = (s.q[j] - sp[i - 1].q[j]).abs();
-                assert!(
-                    step <= limits.arm_speed[j] * 1e-3 * (1.0 + 1e-6),
-                    "seq {}",
-                    s.seq
-                );
-            }
         }
+    }
+    let q: Vec<[f64; NA]> = sp.iter().map(|s| s.q).collect();
+    let r = stream_ratios(&q, &limits);
+    println!(
+        "received stream: speed {:.3}, acceleration {:.3}, jerk {:.3} of the limits",
+        r[0], r[1], r[2]
+    );
+    assert!(r.iter().all(|x| *x <= 1.0 + 1e-9), "{r:?}");
+    assert_eq!(r_u64(&r_json, "shaped"), 0, "{r_json}");
+    // Certified = emitted: the arm motions received are exactly those of the planned program
+    // (the same executor on the ideal cell), setpoint for setpoint.
+    let certified = certified_arm_stream(&floor_task());
+    let received = moves(&q);
+    assert_eq!(received.len(), certified.len(), "arm setpoints that move");
+    for (k, (a, b)) in received.iter().zip(&certified).enumerate() {
+        assert_eq!(a, b, "moving arm setpoint {k}");
     }
     assert_ne!(sp.last().unwrap().flags & flags::LAST, 0);
     assert_ne!(sp[0].flags & flags::FIRST, 0);
@@ -276,6 +287,61 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
         dp <= 5e-3 && da <= 1e-2,
         "part {dp} m, {da} rad from its goal"
     );
+}
+
+fn r_u64(r: &serde_json::Value, key: &str) -> u64 {
+    r[key].as_u64().unwrap_or_else(|| panic!("no {key} in {r}"))
+}
+
+/// Peak (speed, acceleration, jerk) ratios of an arm stream at 1 ms that stands still before
+/// and after it: third differences of the padded stream.
+fn stream_ratios(q: &[[f64; NA]], l: &MotionLimits) -> [f64; 3] {
+    let dt = 1e-3;
+    let mut p = vec![q[0]; 3];
+    p.extend_from_slice(q);
+    p.extend([*q.last().unwrap(); 3]);
+    let mut r = [0.0f64; 3];
+    for k in 3..p.len() {
+        for j in 0..NA {
+            let d1 = p[k][j] - p[k - 1][j];
+            let d2 = p[k][j] - 2.0 * p[k - 1][j] + p[k - 2][j];
+            let d3 = p[k][j] - 3.0 * p[k - 1][j] + 3.0 * p[k - 2][j] - p[k - 3][j];
+            r[0] = r[0].max(d1.abs() / dt / l.arm_speed[j]);
+            r[1] = r[1].max(d2.abs() / (dt * dt) / l.arm_acceleration[j]);
+            r[2] = r[2].max(d3.abs() / (dt * dt * dt) / l.arm_jerk[j]);
+        }
+    }
+    r
+}
+
+/// The arm setpoints of a stream that differ from their predecessor (the moving ones: waits
+/// on the platform or the gripper last as long as they last).
+fn moves(q: &[[f64; NA]]) -> Vec<[f64; NA]> {
+    let mut out: Vec<[f64; NA]> = Vec::new();
+    for x in q {
+        if out.last() != Some(x) {
+            out.push(*x);
+        }
+    }
+    out
+}
+
+/// The moving arm setpoints of the task's planned program executed on the ideal cell.
+fn certified_arm_stream(ft: &FloorTask) -> Vec<[f64; NA]> {
+    let bytes = std::fs::read(blob()).expect("blob");
+    let rt = prf_runtime::Runtime::load(&bytes).expect("load");
+    let p = prf_runtime::plan::plan(&rt, &ft.task()).expect("plan");
+    let program = p.program.expect("program");
+    let run = prf_host::ideal::execute(
+        &rt,
+        &program,
+        &ft.home,
+        prf_runtime::executor::ExecutorConfig::default(),
+        400_000,
+    );
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    let q: Vec<[f64; NA]> = run.setpoints.iter().map(|s| s.arm).collect();
+    moves(&q)
 }
 
 /// Killing firmware-sim mid-task: the cell detects it within 10 ms and stops with a fault;

@@ -57,6 +57,12 @@ fn every_task_meets_the_budgets_and_matches_the_host_stream() {
             c.arm
         );
         assert!(c.arm <= STREAM_TOLERANCE && c.base_goal <= STREAM_TOLERANCE);
+        assert!(
+            c.emitted.within(),
+            "{}: the firmware's stream exceeds the limits: {}",
+            r.label,
+            c.emitted
+        );
         assert_eq!(c.setpoints as u64, f.ticks);
         assert!(
             f.tick_max <= MAX_TICK_INSTRUCTIONS,

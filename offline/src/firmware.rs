@@ -8,6 +8,7 @@ use prf_runtime::executor::{ExecutorConfig, Mode, Setpoint};
 pub use prf_runtime::figures::Figures;
 use prf_runtime::stream::{RECORD_LEN, Record, decode};
 use prf_runtime::{Runtime, plan, task_block};
+use prf_shared::limits::{ArmMeter, LimitRatios, MotionLimits};
 use prf_sim::tasks::FloorTask;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -215,12 +216,19 @@ pub struct Comparison {
     pub arm: f64,
     /// Largest difference of the platform goals, m or rad.
     pub base_goal: f64,
+    /// Peak limit ratios of the firmware's arm stream (1 ms finite differences, from and to
+    /// standstill): every one ≤ 1 for a certified program.
+    pub emitted: LimitRatios,
 }
 
 /// Compares the firmware's stream with the host's: the same length, sequence numbers,
-/// modes, segments and gripper commands, and numbers within [`STREAM_TOLERANCE`]. The error
-/// names the first setpoint that differs.
-pub fn compare(host: &[Setpoint], firmware: &[Record]) -> std::result::Result<Comparison, String> {
+/// modes, segments and gripper commands, and numbers within [`STREAM_TOLERANCE`]; rates the
+/// firmware's arm stream against `limits`. The error names the first setpoint that differs.
+pub fn compare(
+    host: &[Setpoint],
+    firmware: &[Record],
+    limits: &MotionLimits,
+) -> std::result::Result<Comparison, String> {
     if host.len() != firmware.len() {
         return Err(format!(
             "{} firmware setpoints, {} host setpoints",
@@ -232,7 +240,11 @@ pub fn compare(host: &[Setpoint], firmware: &[Record]) -> std::result::Result<Co
         setpoints: host.len(),
         arm: 0.0,
         base_goal: 0.0,
+        emitted: LimitRatios::default(),
     };
+    let mut meter = firmware
+        .first()
+        .map(|f| ArmMeter::at_rest(limits, 1e-3, &f.arm));
     let max_diff = |a: &[f64], b: &[f64]| {
         a.iter()
             .zip(b)
@@ -262,6 +274,13 @@ pub fn compare(host: &[Setpoint], firmware: &[Record]) -> std::result::Result<Co
         }
         c.arm = c.arm.max(arm);
         c.base_goal = c.base_goal.max(base);
+        if let Some(m) = meter.as_mut() {
+            m.push(&f.arm);
+        }
+    }
+    if let Some(mut m) = meter {
+        m.stop();
+        c.emitted = m.ratios();
     }
     if host.last().is_some_and(|h| h.mode != Mode::Done) {
         return Err("the streams agree but do not end in Done".into());
@@ -334,8 +353,9 @@ pub fn check_task(elf: &Path, blob: &Path, task: &FloorTask, dir: &Path) -> Resu
     let run = run(elf, args)?;
     let bytes = read(blob)?;
     let host = host_stream(&bytes, &block)?;
+    let limits = Runtime::load(&bytes).map_err(FirmwareError::Load)?.limits;
     let comparison = match (run.status, read_stream(&stream_path)) {
-        (Some(0), Ok(fw)) => compare(&host, &fw),
+        (Some(0), Ok(fw)) => compare(&host, &fw, &limits),
         (status, Ok(_)) => Err(format!("the firmware exited with {status:?}")),
         (_, Err(e)) => Err(match std::error::Error::source(&e) {
             Some(cause) => format!("{e}: {cause}"),

@@ -95,9 +95,11 @@ fn limit_ratios<const N: usize>(m: &Motion<N>, l: &Limits<N>, dt: f64) -> (f64, 
 
 #[test]
 fn lspb_stays_within_limits_and_hits_its_ends() {
+    // No jerk filter: the bare LSPB.
     let limits = Limits {
         speed: [1.0, 0.5, 2.0],
         acceleration: [2.0, 1.0, 4.0],
+        jerk: [f64::INFINITY; 3],
     };
     let path = [
         [0.0, 0.0, 0.0],
@@ -145,6 +147,61 @@ fn lspb_stays_within_limits_and_hits_its_ends() {
         path.len(),
         "the exact-stop motion rests at every via point"
     );
+}
+
+/// The jerk filter: the smoothed motion keeps speed, acceleration and jerk (third differences
+/// at 1 ms) within the limits, starts and ends at rest on the path's ends, and takes the
+/// filter window longer than the bare LSPB.
+#[test]
+fn the_jerk_filter_keeps_every_limit() {
+    let bare = Limits {
+        speed: [1.0, 0.5, 2.0],
+        acceleration: [2.0, 1.0, 4.0],
+        jerk: [f64::INFINITY; 3],
+    };
+    let limits = Limits {
+        jerk: [20.0, 10.0, 40.0],
+        ..bare
+    };
+    let path = [[0.0, 0.0, 0.0], [1.0, 0.2, -0.5], [1.5, -0.8, 0.5]];
+    for blend in [true, false] {
+        let m = Motion::new(&path, &limits, blend);
+        let raw = Motion::new(&path, &bare, blend);
+        // Window 2·a/j = 0.2 s on every axis.
+        assert!((m.duration() - raw.duration() - 0.2).abs() < 1e-12);
+        let dt = 1e-3;
+        let n = (m.duration() / dt).ceil() as usize + 3;
+        let q: Vec<[f64; 3]> = (0..=n).map(|k| m.at(k as f64 * dt - 2.0 * dt)).collect();
+        let (mut rv, mut ra, mut rj) = (0.0f64, 0.0f64, 0.0f64);
+        for k in 3..q.len() {
+            for j in 0..3 {
+                let d1 = q[k][j] - q[k - 1][j];
+                let d2 = q[k][j] - 2.0 * q[k - 1][j] + q[k - 2][j];
+                let d3 = q[k][j] - 3.0 * q[k - 1][j] + 3.0 * q[k - 2][j] - q[k - 3][j];
+                rv = rv.max(d1.abs() / dt / limits.speed[j]);
+                ra = ra.max(d2.abs() / (dt * dt) / limits.acceleration[j]);
+                rj = rj.max(d3.abs() / (dt * dt * dt) / limits.jerk[j]);
+            }
+        }
+        assert!(
+            rv <= 1.0 + 1e-9 && ra <= 1.0 + 1e-6,
+            "speed {rv}, acceleration {ra}"
+        );
+        assert!(rj <= 1.0 + 1e-6, "jerk ratio {rj}");
+        // Without the filter the same path steps its acceleration: far above the jerk limit.
+        let qr: Vec<[f64; 3]> = (0..=n).map(|k| raw.at(k as f64 * dt - 2.0 * dt)).collect();
+        let jerk = (3..qr.len())
+            .map(|k| {
+                let d3 = qr[k][0] - 3.0 * qr[k - 1][0] + 3.0 * qr[k - 2][0] - qr[k - 3][0];
+                d3.abs() / (dt * dt * dt) / limits.jerk[0]
+            })
+            .fold(0.0, f64::max);
+        assert!(jerk > 10.0, "unfiltered jerk ratio {jerk}");
+        for j in 0..3 {
+            assert!((m.start()[j] - path[0][j]).abs() < 1e-12);
+            assert!((m.end()[j] - path[2][j]).abs() < 1e-12);
+        }
+    }
 }
 
 /// The unit square with a wall at x = 0.5 except for a gap at y ∈ [0.45, 0.55].

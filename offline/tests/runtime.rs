@@ -7,13 +7,17 @@ use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode};
 use prf_runtime::plan::{PlanError, plan};
 use prf_runtime::program::Segment;
 use prf_runtime::reverse::Reversal;
-use prf_runtime::skill_plan::{Evaluation, PttClasses, PttSides, evaluate_arm_motion};
+use prf_runtime::skill_plan::{
+    Evaluation, PttClasses, PttSides, evaluate_arm_motion, trace_arm_motion,
+};
 use prf_runtime::task::{Missing, TaskError};
 use prf_runtime::{LoadError, Runtime};
 use prf_shared::JointVector;
 use prf_shared::kinematics::ArmKinematics;
-use prf_shared::rdmp::integrate;
+use prf_shared::limits::MotionLimits;
+use prf_shared::rdmp::RdmpRun;
 use prf_shared::risk::RiskAccumulator;
+use prf_shared::robot::RobotModel;
 use prf_sim::blob_of_demonstrations;
 use prf_sim::tasks::{FloorTask, world_tasks};
 use prf_sim::world::World;
@@ -173,14 +177,24 @@ fn brute_force_risk(
     let rdmp = rt.skill_rdmp(skill as usize).ok()??;
     let goal = side.goal(stance, grasp)?;
     let base = &side.arm_bases[stance];
+    // The timing (time scale, ticks) is a property of the candidate alone; the risk of the
+    // stream at that timing is integrated here on its own, without bound.
+    let Evaluation::Risk { timing, .. } =
+        evaluate_arm_motion(rt, &rdmp, goal, &side.field, base, f64::INFINITY)
+    else {
+        return None;
+    };
     let model = &rt.model;
+    let rdmp = rdmp.time_scaled(timing.scale);
     let q0 = JointVector::from(model.home);
+    let mut run = RdmpRun::new(model, &rdmp, &q0, goal, &rt.config.rdmp).ok()?;
+    run.set_steps(timing.steps as usize);
     let mut acc = RiskAccumulator::default();
     acc.add(model, &side.field, base, &ArmKinematics::new(model, &q0));
-    integrate(model, &rdmp, &q0, goal, &rt.config.rdmp, |s| {
+    while !run.finished() {
+        let s = run.step(model, &rdmp, &rt.config.rdmp).ok()?;
         acc.add(model, &side.field, base, &ArmKinematics::new(model, &s.q));
-    })
-    .ok()?;
+    }
     Some(acc.risk())
 }
 
@@ -315,10 +329,14 @@ fn the_executor_runs_exactly_the_planned_trajectory() {
         let rdmp = rt.skill_rdmp(skill as usize).unwrap().unwrap();
         let goal = side.goal(stance as usize, c.grasp as usize).unwrap();
         let base = &side.arm_bases[stance as usize];
-        let e = evaluate_arm_motion(&rt, &rdmp, goal, &side.field, base, f64::INFINITY, |q| {
+        let e = evaluate_arm_motion(&rt, &rdmp, goal, &side.field, base, f64::INFINITY);
+        let Evaluation::Risk { timing, .. } = e else {
+            panic!("{e:?}")
+        };
+        trace_arm_motion(&rt, &rdmp, goal, &timing, |q| {
             planned.push(<[f64; 7]>::from(*q))
-        });
-        assert!(matches!(e, Evaluation::Risk { .. }));
+        })
+        .expect("trace");
         // Forward: q_1 … q_n; the gripper waits at q_n; backwards: q_{n−1} … q_0.
         let forward = arm_setpoints(&run, seg);
         let backward = arm_setpoints(&run, seg + 2);
@@ -452,4 +470,145 @@ fn bad_input_gives_typed_errors_or_a_fault() {
     assert_eq!(ex.fault(), Some(Fault::Timeout { segment: 0 }));
     let sp = ex.tick(t(0), &at_home);
     assert_eq!(sp.mode, Mode::Fault);
+}
+
+/// Peak (position, speed, acceleration, jerk) ratios of an arm stream sampled at 1 ms that
+/// stands still before its first and after its last sample: plain third differences of the
+/// padded stream (independent of `prf_shared::limits::ArmMeter`).
+fn stream_ratios(stream: &[[f64; 7]], model: &prf_shared::robot::RobotModel) -> [f64; 4] {
+    let l = MotionLimits::kmr_iiwa(model);
+    let dt = 1e-3;
+    let mut p = vec![stream[0]; 3];
+    p.extend_from_slice(stream);
+    p.extend([*stream.last().unwrap(); 3]);
+    let mut r = [0.0f64; 4];
+    for k in 3..p.len() {
+        for j in 0..7 {
+            let (lo, hi) = (model.joints[j].lower, model.joints[j].upper);
+            let d1 = p[k][j] - p[k - 1][j];
+            let d2 = p[k][j] - 2.0 * p[k - 1][j] + p[k - 2][j];
+            let d3 = p[k][j] - 3.0 * p[k - 1][j] + 3.0 * p[k - 2][j] - p[k - 3][j];
+            r[0] = r[0].max((2.0 * p[k][j] - lo - hi).abs() / (hi - lo));
+            r[1] = r[1].max(d1.abs() / dt / l.arm_speed[j]);
+            r[2] = r[2].max(d2.abs() / (dt * dt) / l.arm_acceleration[j]);
+            r[3] = r[3].max(d3.abs() / (dt * dt * dt) / l.arm_jerk[j]);
+        }
+    }
+    r
+}
+
+/// Certified = emitted: each of the example cell's 18 planned programs, executed on the ideal
+/// cell, emits an arm stream within the position, speed, acceleration and jerk limits, from
+/// standstill to standstill, with the timing the planner certified.
+#[test]
+fn every_planned_program_emits_within_the_joint_limits() {
+    let world = World::example();
+    let rt = Runtime::load(full_blob()).expect("load");
+    for ft in world_tasks(&world) {
+        let p = plan(&rt, &ft.task()).expect("plan");
+        let program = p.program.as_ref().expect("program");
+        let (t1, t2) = p.skills.timing.expect("timing");
+        let run = execute(&rt, program, &ft.home, ExecutorConfig::default(), 400_000);
+        assert!(run.fault.is_none(), "{}: {:?}", ft.label(), run.fault);
+        let arm: Vec<[f64; 7]> = run.setpoints.iter().map(|s| s.arm).collect();
+        let r = stream_ratios(&arm, &rt.model);
+        println!(
+            "{}: τ × {:.3} / {:.3}; position {:.3}, speed {:.3}, acceleration {:.3}, jerk {:.3} of the limits",
+            ft.label(),
+            t1.scale,
+            t2.scale,
+            r[0],
+            r[1],
+            r[2],
+            r[3]
+        );
+        for (what, x) in ["position", "speed", "acceleration", "jerk"].iter().zip(r) {
+            assert!(x <= 1.0 + 1e-9, "{}: {what} ratio {x}", ft.label());
+        }
+        // The planner's own rating agrees with the stream's.
+        let planned = t1.ratios.max().max(t2.ratios.max());
+        assert!((planned - r.iter().fold(0.0f64, |m, x| m.max(*x))).abs() < 1e-6);
+    }
+}
+
+/// A demonstration played twice as fast (the same samples at 200 Hz) exceeds the limits; the
+/// compiler paces its skill down to the original's pace (τ × about 2) instead of anything
+/// clipping it: the planned motion is within the limits, as long as the original's, and
+/// follows the same path to the same configuration.
+#[test]
+fn a_fast_demonstration_is_time_scaled_not_clipped() {
+    let world = World::example();
+    let chosen: Vec<_> = world
+        .afforded_tasks()
+        .into_iter()
+        .filter(|a| {
+            let t = &a.task;
+            (a.approach_from, a.approach_to, a.grasp) == (0, 0, 0)
+                && world.parts[t.part].id == "Part1"
+                && world.locations[t.from].kind == "CNC"
+                && world.locations[t.to].kind == "Table"
+        })
+        .collect();
+    let quiet = &prf_files::progress::quiet;
+    let ds = prf_sim::demogen::generate_dataset(&world, &chosen, 1, 100.0, quiet).expect("gen");
+    let mut fast = ds.clone();
+    fast.rate_hz = 200.0;
+    for d in &mut fast.demonstrations {
+        for s in &mut d.samples {
+            s.t *= 0.5;
+        }
+    }
+    let model = RobotModel::kmr_iiwa14();
+    let blob = |ds: &prf_files::dataset::Dataset| {
+        let k =
+            prf_learn::learn(ds, &model, &prf_learn::LearnConfig::default(), quiet).expect("learn");
+        prf_learn::compile(&k).expect("compile")
+    };
+    let (normal, fast) = (blob(&ds), blob(&fast));
+    let ft = FloorTask::new(&world, "Part1", "CNC1", "Table1").expect("task");
+    let pick_stream = |bytes: &[u8]| {
+        let rt = Runtime::load(bytes).expect("load");
+        let p = plan(&rt, &ft.task()).expect("plan");
+        let c = p.skills.choice.expect("choice");
+        let (t, _) = p.skills.timing.expect("timing");
+        let resolved = ft.task().resolve(&rt).unwrap().unwrap();
+        let sides =
+            PttSides::new(&rt, &ft.task(), &resolved, &PttClasses::of(&rt).unwrap()).unwrap();
+        let rdmp = rt.skill_rdmp(c.pick_skill as usize).unwrap().unwrap();
+        let goal = sides
+            .pick
+            .goal(c.stance_from as usize, c.grasp as usize)
+            .unwrap();
+        let mut q = Vec::new();
+        trace_arm_motion(&rt, &rdmp, goal, &t, |x| q.push(<[f64; 7]>::from(*x))).unwrap();
+        (rdmp.duration(), t, q)
+    };
+    let (tau_n, t_n, q_n) = pick_stream(&normal);
+    let (tau_f, t_f, q_f) = pick_stream(&fast);
+    println!(
+        "normal: τ {tau_n:.3} s × {:.3}; fast: τ {tau_f:.3} s × {:.3}",
+        t_n.scale, t_f.scale
+    );
+    assert!(
+        (tau_f * t_f.scale / (tau_n * t_n.scale) - 1.0).abs() < 0.05,
+        "slowed down to the original's pace"
+    );
+    assert!((q_f.len() as f64 / q_n.len() as f64 - 1.0).abs() < 0.05);
+    let r = stream_ratios(&q_f, &model);
+    assert!(r.iter().all(|x| *x <= 1.0 + 1e-9), "{r:?}");
+    // The same path: every configuration of the slowed motion lies within 1 mrad of the
+    // original's path, and both end at the same configuration.
+    let dist = |a: &[f64; 7], b: &[f64; 7]| {
+        a.iter()
+            .zip(b)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+    };
+    let mut j = 0;
+    for q in &q_f {
+        while j + 1 < q_n.len() && dist(q, &q_n[j + 1]) <= dist(q, &q_n[j]) {
+            j += 1;
+        }
+        assert!(dist(q, &q_n[j]) < 1e-3, "{}", dist(q, &q_n[j]));
+    }
+    assert!(dist(q_f.last().unwrap(), q_n.last().unwrap()) < 1e-4);
 }

@@ -292,7 +292,12 @@ impl<'r, 'a> Executor<'r, 'a> {
     /// or else start its run. True when the segment is ready to step (no work done then).
     fn prepare(&mut self, i: usize) -> Result<bool, Fault> {
         let segment = i as u8;
-        let Some(Segment::Arm { skill, goal, steps }) = self.program.segments.get(i).copied()
+        let Some(Segment::Arm {
+            skill,
+            goal,
+            steps,
+            scale,
+        }) = self.program.segments.get(i).copied()
         else {
             return Err(Fault::Program { segment });
         };
@@ -306,6 +311,7 @@ impl<'r, 'a> Executor<'r, 'a> {
             if !has {
                 return Err(Fault::Program { segment });
             }
+            self.rdmp = self.rdmp.time_scaled(scale);
             self.prepared = Some(i);
             return Ok(false);
         }
@@ -313,8 +319,9 @@ impl<'r, 'a> Executor<'r, 'a> {
             return Ok(true);
         }
         let q0 = JointVector::from(self.last.arm);
-        let run = RdmpRun::new(&self.rt.model, &self.rdmp, &q0, &goal, &self.rt.config.rdmp)
+        let mut run = RdmpRun::new(&self.rt.model, &self.rdmp, &q0, &goal, &self.rt.config.rdmp)
             .map_err(|error| Fault::Rdmp { segment, error })?;
+        run.set_steps(steps as usize);
         self.reversal
             .begin(steps as usize)
             .map_err(|error| Fault::Reverse { segment, error })?;

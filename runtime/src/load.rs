@@ -2,6 +2,7 @@
 
 use prf_shared::blob::{Blob, BlobError};
 use prf_shared::field::Field;
+use prf_shared::limits::MotionLimits;
 use prf_shared::motion::{self, MotionClass};
 use prf_shared::rdmp::{Rdmp, RdmpConfig};
 use prf_shared::robot::RobotModel;
@@ -68,6 +69,8 @@ pub struct Runtime<'a> {
     pub model: RobotModel,
     /// Settings of planning and execution.
     pub config: RuntimeConfig,
+    /// The robot's motion limits: every planned arm stream stays within them.
+    pub limits: MotionLimits,
     classes: heapless::Vec<&'static dyn MotionClass, MAX_CLASSES>,
 }
 
@@ -96,6 +99,7 @@ impl<'a> Runtime<'a> {
         }
         Ok(Runtime {
             blob,
+            limits: MotionLimits::kmr_iiwa(&model),
             model,
             config,
             classes,

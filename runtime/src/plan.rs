@@ -94,7 +94,7 @@ pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>
     let sides = PttSides::new(rt, task, &resolved, &classes)?;
     let skills = plan_skills(rt, &sides)?;
     let (mut program, mut stances) = (None, None);
-    if let Some(c) = skills.choice {
+    if let (Some(c), Some((t1, t2))) = (skills.choice, skills.timing) {
         let (s1, s2, g) = (
             c.stance_from as usize,
             c.stance_to as usize,
@@ -112,7 +112,7 @@ pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>
             },
             Realization {
                 goal: Goal::Tcp(pick_goal),
-                skill: Some(c.pick_skill),
+                skill: Some((c.pick_skill, t1)),
             },
             Realization {
                 goal: Goal::Base(p2),
@@ -120,7 +120,7 @@ pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>
             },
             Realization {
                 goal: Goal::Tcp(place_goal),
-                skill: Some(c.place_skill),
+                skill: Some((c.place_skill, t2)),
             },
             Realization {
                 goal: Goal::Base(task.home),

@@ -4,6 +4,7 @@
 
 use crate::load::{LoadError, Runtime};
 use crate::reverse::{MAX_STEPS, ReverseError};
+use crate::skill_plan::ArmTiming;
 use crate::task_plan::ActionPlan;
 use prf_shared::motion::{Generator, Goal};
 use prf_shared::se3::Pose;
@@ -19,8 +20,8 @@ pub enum Segment {
         /// Platform goal in the world.
         goal: Pose,
     },
-    /// π_ArmRDMP: skill `skill`'s RDMP from the current arm configuration to `goal` (arm base
-    /// frame), `steps` ticks.
+    /// π_ArmRDMP: skill `skill`'s RDMP, slowed down by `scale`, from the current arm
+    /// configuration to `goal` (arm base frame), `steps` ticks.
     Arm {
         /// Blob index of the skill.
         skill: u16,
@@ -28,6 +29,8 @@ pub enum Segment {
         goal: Pose,
         /// Ticks of the motion.
         steps: u32,
+        /// Time scale τ / τ_demonstrated ([`prf_shared::rdmp::Rdmp::time_scaled`]).
+        scale: f64,
     },
     /// π_Grip: command the gripper and wait for it.
     Grip {
@@ -41,13 +44,14 @@ pub enum Segment {
     },
 }
 
-/// The parameters an action was realized with: its goal and, for RDMP generators, its skill.
+/// The parameters an action was realized with: its goal and, for RDMP generators, its skill
+/// and the timing the planner certified.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Realization {
     /// The goal the action was realized with.
     pub goal: Goal,
-    /// The skill (RDMP generators only).
-    pub skill: Option<u16>,
+    /// The skill and its timing (RDMP generators only).
+    pub skill: Option<(u16, ArmTiming)>,
 }
 
 /// Why a skill plan cannot be turned into a program.
@@ -113,17 +117,18 @@ impl Program {
             for g in class.generators() {
                 let seg = match (g, r.goal, r.skill) {
                     (Generator::BaseMove, Goal::Base(goal), _) => Segment::Base { goal },
-                    (Generator::ArmRdmp, Goal::Tcp(goal), Some(skill)) => {
-                        let rdmp = rt.skill_rdmp(skill as usize)?.ok_or(bad)?;
-                        let steps = libm::round(rdmp.duration() / rt.config.rdmp.dt) as usize;
+                    (Generator::ArmRdmp, Goal::Tcp(goal), Some((skill, timing))) => {
+                        rt.skill_rdmp(skill as usize)?.ok_or(bad)?;
+                        let steps = timing.steps as usize;
                         if steps > MAX_STEPS {
                             return Err(ProgramError::Reverse(ReverseError::TooLong { steps }));
                         }
-                        arm_steps = steps as u32;
+                        arm_steps = timing.steps;
                         Segment::Arm {
                             skill,
                             goal,
                             steps: arm_steps,
+                            scale: timing.scale,
                         }
                     }
                     (Generator::ArmRdmpReversed, Goal::Tcp(_), Some(_)) => {

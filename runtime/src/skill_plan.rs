@@ -25,11 +25,13 @@ use crate::load::{LoadError, Runtime};
 use crate::task::{Resolved, Task};
 use crate::task_plan::{Action, ActionPlan, FROM, HOME, TO};
 use prf_shared::field::Field;
-use prf_shared::kinematics::ArmKinematics;
+use prf_shared::limits::LimitRatios;
 use prf_shared::motion::{Goal, GoalContext, MotionClass, PhysicalState};
 use prf_shared::rdmp::{Rdmp, RdmpError, RdmpRun};
 use prf_shared::risk::RiskAccumulator;
 use prf_shared::se3::{Pose, pose_from_array};
+pub use prf_shared::timing::{ArmTiming, MAX_TIME_SCALE};
+use prf_shared::timing::{TimingError, pace_observed};
 use prf_shared::{JointVector, blob::MAX_AFFORDANCES};
 
 /// The classes a part-transportation plan uses.
@@ -66,6 +68,8 @@ pub struct PlanStats {
     pub pruned: u32,
     /// ... of which failed (singular, joint limit, non-finite).
     pub failed: u32,
+    /// ... of which exceeded a joint limit even at [`MAX_TIME_SCALE`].
+    pub too_fast: u32,
     /// Integration steps taken in total.
     pub steps: u64,
     /// Integrations the paper's full grid would run (2 per grid point).
@@ -83,6 +87,8 @@ pub struct SkillPlan {
     pub r_pick: f64,
     /// Risk r_Place of the chosen place motion, m.
     pub r_place: f64,
+    /// Timing of the chosen pick and place motions.
+    pub timing: Option<(ArmTiming, ArmTiming)>,
     /// J* ≤ the configured risk threshold.
     pub feasible: bool,
     /// The work done.
@@ -92,21 +98,29 @@ pub struct SkillPlan {
 /// What an arm motion candidate came to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Evaluation {
-    /// Fully integrated: its risk (Eq. 16) and number of steps.
+    /// Fully integrated within the limits: its risk (Eq. 16) and timing.
     Risk {
         /// Risk (Eq. 16), m.
         risk: f64,
-        /// Steps of the motion.
+        /// Time scale, ticks and limit ratios of the motion.
+        timing: ArmTiming,
+        /// Integration steps taken (all time scales tried).
         steps: usize,
     },
-    /// Stopped after `steps` because its running risk reached the bound.
-    /// Stopped early by the bound.
+    /// Its risk reached the bound: it cannot win.
     Pruned {
-        /// Steps taken before the stop.
+        /// Integration steps taken (all time scales tried).
         steps: usize,
     },
     /// The RDMP could not be integrated.
     Failed(RdmpError),
+    /// Even at [`MAX_TIME_SCALE`] the stream would exceed a joint limit.
+    TooFast {
+        /// The last time scale tried.
+        scale: f64,
+        /// The ratios it reached (the run stops at the first violation).
+        ratios: LimitRatios,
+    },
 }
 
 /// Why planning stopped with an error.
@@ -156,10 +170,13 @@ impl From<prf_shared::blob::BlobError> for SkillPlanError {
     }
 }
 
-/// Integrates `rdmp` from q_a,H to `goal` (arm base frame) with the runtime's step, and
-/// accumulates the risk in `field` with the arm base at `arm_base` (field frame). Stops
-/// with [`Evaluation::Pruned`] once the running risk reaches `bound` (∞: never).
-/// `visit` sees every configuration, q_a,H first.
+/// Evaluates an arm motion candidate: integrates `rdmp` from q_a,H to `goal` (arm base frame)
+/// with the runtime's step, slowed down by the smallest time scale at which its emitted
+/// stream keeps every joint within position, speed, acceleration and jerk limits
+/// ([`prf_shared::timing::pace_observed`]), and takes the risk in `field` (arm base at
+/// `arm_base`, field frame) of exactly that stream. [`Evaluation::Pruned`] once the running
+/// risk of the final stream reaches `bound` (∞: never): the timing is settled first, so a
+/// pruned candidate is one the full evaluation would also rate at ≥ `bound`.
 pub fn evaluate_arm_motion(
     rt: &Runtime<'_>,
     rdmp: &Rdmp,
@@ -167,41 +184,60 @@ pub fn evaluate_arm_motion(
     field: &Field<'_>,
     arm_base: &Pose,
     bound: f64,
-    mut visit: impl FnMut(&JointVector),
 ) -> Evaluation {
+    if !(bound > 0.0) {
+        // Risk is never negative: nothing reaches below 0, whatever its timing.
+        return Evaluation::Pruned { steps: 0 };
+    }
     let (model, cfg) = (&rt.model, &rt.config.rdmp);
     let q0 = JointVector::from(model.home);
-    let mut run = match RdmpRun::new(model, rdmp, &q0, goal, cfg) {
-        Ok(r) => r,
-        Err(e) => return Evaluation::Failed(e),
-    };
-    let mut acc = RiskAccumulator::default();
-    let mut steps = 0;
-    let mut q = q0;
-    // Each step shows the FK of the configuration it leaves: q_0 … q_{n−1}; q_n is added last.
+    // Per run: the risk so far and whether it is still below the bound.
+    let paced = pace_observed(
+        model,
+        &rt.limits,
+        cfg,
+        rdmp,
+        &q0,
+        goal,
+        || (RiskAccumulator::default(), true),
+        |(acc, below), kin| {
+            if *below && acc.add(model, field, arm_base, kin) >= bound {
+                *below = false;
+            }
+        },
+    );
+    let ((acc, below), steps) = (paced.observer, paced.steps);
+    match paced.timing {
+        Ok(timing) if below => Evaluation::Risk {
+            risk: acc.risk(),
+            timing,
+            steps,
+        },
+        Ok(_) => Evaluation::Pruned { steps },
+        Err(TimingError::Rdmp(e)) => Evaluation::Failed(e),
+        Err(TimingError::TooFast { scale, ratios }) => Evaluation::TooFast { scale, ratios },
+    }
+}
+
+/// The configurations of an evaluated arm motion, q_a,H first: the stream the executor emits
+/// for it (for checks and exports).
+pub fn trace_arm_motion(
+    rt: &Runtime<'_>,
+    rdmp: &Rdmp,
+    goal: &Pose,
+    timing: &ArmTiming,
+    mut visit: impl FnMut(&JointVector),
+) -> Result<(), RdmpError> {
+    let (model, cfg) = (&rt.model, &rt.config.rdmp);
+    let rdmp = rdmp.time_scaled(timing.scale);
+    let q0 = JointVector::from(model.home);
+    let mut run = RdmpRun::new(model, &rdmp, &q0, goal, cfg)?;
+    run.set_steps(timing.steps as usize);
+    visit(&q0);
     while !run.finished() {
-        visit(&q);
-        let mut risk = 0.0;
-        let step = run.step_observed(model, rdmp, cfg, |kin| {
-            risk = acc.add(model, field, arm_base, kin);
-        });
-        if risk >= bound {
-            return Evaluation::Pruned { steps };
-        }
-        match step {
-            Ok(s) => q = s.q,
-            Err(e) => return Evaluation::Failed(e),
-        }
-        steps += 1;
+        visit(&run.step(model, &rdmp, cfg)?.q);
     }
-    visit(&q);
-    if acc.add(model, field, arm_base, &ArmKinematics::new(model, &q)) >= bound {
-        return Evaluation::Pruned { steps };
-    }
-    Evaluation::Risk {
-        risk: acc.risk(),
-        steps,
-    }
+    Ok(())
 }
 
 /// One side of the search (Pick at ℓ1 or Place at ℓ2): its workspace, the arm base of each
@@ -482,8 +518,8 @@ impl<'a> PttSides<'a> {
     }
 }
 
-/// The best candidate of one side found so far: (risk, stance, skill).
-type Best = Option<(f64, u8, u16)>;
+/// The best candidate of one side found so far: (risk, stance, skill, timing).
+type Best = Option<(f64, u8, u16, ArmTiming)>;
 
 /// min over the side's candidates of r for grasp `grasp`, counting only candidates with
 /// r < `bound`; the first candidate in order wins ties.
@@ -506,11 +542,15 @@ fn side_minimum(
         };
         let arm_base = &side.arm_bases[s as usize];
         stats.integrations += 1;
-        match evaluate_arm_motion(rt, &rdmp, goal, &side.field, arm_base, limit, |_| {}) {
-            Evaluation::Risk { risk, steps } => {
+        match evaluate_arm_motion(rt, &rdmp, goal, &side.field, arm_base, limit) {
+            Evaluation::Risk {
+                risk,
+                timing,
+                steps,
+            } => {
                 stats.steps += steps as u64;
                 if risk < limit {
-                    best = Some((risk, s, k));
+                    best = Some((risk, s, k, timing));
                     if risk <= 0.0 {
                         return false;
                     }
@@ -521,6 +561,7 @@ fn side_minimum(
                 stats.steps += steps as u64;
             }
             Evaluation::Failed(_) => stats.failed += 1,
+            Evaluation::TooFast { .. } => stats.too_fast += 1,
         }
         true
     })?;
@@ -537,13 +578,15 @@ pub fn plan_skills(rt: &Runtime<'_>, sides: &PttSides<'_>) -> Result<SkillPlan, 
             * (pick.skills.len() * place.skills.len()) as u64,
         ..PlanStats::default()
     };
-    let mut best: Option<(f64, Choice, f64, f64)> = None;
+    // (J, choice, r_pick, r_place, timings) of the best plan so far.
+    type Plan = (f64, Choice, f64, f64, (ArmTiming, ArmTiming));
+    let mut best: Option<Plan> = None;
     for g in 0..sides.grasps {
         let bound = best.map_or(f64::INFINITY, |b| b.0);
-        let Some((r_pick, s1, k1)) = side_minimum(rt, pick, g, bound, &mut stats)? else {
+        let Some((r_pick, s1, k1, t1)) = side_minimum(rt, pick, g, bound, &mut stats)? else {
             continue;
         };
-        let Some((r_place, s2, k2)) = side_minimum(rt, place, g, bound, &mut stats)? else {
+        let Some((r_place, s2, k2, t2)) = side_minimum(rt, place, g, bound, &mut stats)? else {
             continue;
         };
         let j = r_pick.max(r_place);
@@ -555,21 +598,22 @@ pub fn plan_skills(rt: &Runtime<'_>, sides: &PttSides<'_>) -> Result<SkillPlan, 
                 pick_skill: k1,
                 place_skill: k2,
             };
-            best = Some((j, choice, r_pick, r_place));
+            best = Some((j, choice, r_pick, r_place, (t1, t2)));
             if j <= 0.0 {
                 break;
             }
         }
     }
-    let (j, choice, r_pick, r_place) = match best {
-        Some((j, c, a, b)) => (j, Some(c), a, b),
-        None => (f64::INFINITY, None, f64::INFINITY, f64::INFINITY),
+    let (j, choice, r_pick, r_place, timing) = match best {
+        Some((j, c, a, b, t)) => (j, Some(c), a, b, Some(t)),
+        None => (f64::INFINITY, None, f64::INFINITY, f64::INFINITY, None),
     };
     Ok(SkillPlan {
         choice,
         j,
         r_pick,
         r_place,
+        timing,
         feasible: j <= rt.config.risk_threshold,
         stats,
     })

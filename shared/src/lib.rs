@@ -12,7 +12,9 @@
 //! - [`motion`]: the motion classes Pick, Place, Move (Sec. 5.1, 5.3);
 //! - [`field`], [`risk`]: the learned workspace as a conservative distance field and the
 //!   risk of Eq. 16;
-//! - [`limits`]: speed, acceleration and jerk limits of the KMR iiwa;
+//! - [`limits`]: position, speed, acceleration and jerk limits of the KMR iiwa, and the meter
+//!   that rates a joint stream against them;
+//! - [`timing`]: an RDMP motion timed within the limits (time scaling of τ, settling to rest);
 //! - [`profile`], [`linalg`]: small helpers (time scaling, fixed-size solvers).
 //!
 //! Section, equation and algorithm numbers refer to Toner, Tilbury, Barton, "PRF: A Program
@@ -33,6 +35,7 @@ pub mod rdmp;
 pub mod risk;
 pub mod robot;
 pub mod se3;
+pub mod timing;
 
 /// Number of arm axes n_a. The RDMP null space is n_a − 6 = 1 dimensional.
 pub const NA: usize = 7;

@@ -264,6 +264,18 @@ impl Rdmp {
     pub fn duration(&self) -> f64 {
         self.position.tau
     }
+
+    /// The same RDMP slowed down by `scale` ≥ 1: every DMP's time constant τ becomes
+    /// scale · τ (Eqs. 1, 2 and the canonical system). The continuous trajectory is the same
+    /// path, y_s(t) = y(t / scale): speeds fall by 1/scale, accelerations by 1/scale², jerks by
+    /// 1/scale³.
+    pub fn time_scaled(&self, scale: f64) -> Self {
+        let mut r = *self;
+        r.position.tau *= scale;
+        r.rotation.tau *= scale;
+        r.gamma.tau *= scale;
+        r
+    }
 }
 
 /// One integration step's output: the joint setpoint at step `step`.
@@ -306,6 +318,7 @@ pub struct RdmpCheckpoint {
     rotation: RotationState,
     gamma: PositionState<1>,
     step: usize,
+    n_steps: usize,
     zeta: f64,
     zeta_next: f64,
     gamma_measured: f64,
@@ -321,6 +334,7 @@ impl RdmpRun {
             rotation: self.rotation,
             gamma: self.gamma,
             step: self.phase.step,
+            n_steps: self.phase.n_steps,
             zeta: self.phase.zeta,
             zeta_next: self.phase.zeta_next,
             gamma_measured: self.gamma_measured,
@@ -332,7 +346,8 @@ impl RdmpRun {
     /// step Δt: the following steps equal those of the original run bit for bit.
     pub fn resume(rdmp: &Rdmp, cfg: &RdmpConfig, c: &RdmpCheckpoint) -> Result<Self, RdmpError> {
         let p = &rdmp.position;
-        let phase = Phase::resume(&p.params, p.tau, cfg.dt, c.step, c.zeta, c.zeta_next)?;
+        let mut phase = Phase::resume(&p.params, p.tau, cfg.dt, c.step, c.zeta, c.zeta_next)?;
+        phase.n_steps = c.n_steps;
         Ok(RdmpRun {
             q: c.q,
             position: c.position,
@@ -348,6 +363,7 @@ impl RdmpRun {
     /// bases (the costly part of a resume) and continues bit-identically from `c`.
     pub fn resume_from(&mut self, c: &RdmpCheckpoint) {
         self.phase.seek(c.step, c.zeta, c.zeta_next);
+        self.phase.n_steps = c.n_steps;
         self.q = c.q;
         self.position = c.position;
         self.rotation = c.rotation;
@@ -405,6 +421,14 @@ impl RdmpRun {
     /// (steps done, steps of the whole motion).
     pub fn progress(&self) -> (usize, usize) {
         (self.phase.step, self.phase.n_steps)
+    }
+
+    /// Sets the number of steps of the whole motion to `n` (at least the steps already taken):
+    /// beyond τ the phase keeps decaying, the forcing term vanishes and the DMPs settle on
+    /// their goals (Eq. 1 with f → 0, critically damped), so a motion may run on until it is
+    /// at rest.
+    pub fn set_steps(&mut self, n: usize) {
+        self.phase.n_steps = n.max(self.phase.step);
     }
 
     /// True once the last step was taken.

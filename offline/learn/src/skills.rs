@@ -1,10 +1,14 @@
 //! Skill learning (Alg. 3, lines 12–16, 20): TrainRDMP on every Pick and Place arm motion,
 //! the skill set K per class (duplicates stored once), and share().
 
+use prf_shared::JointVector;
 use prf_shared::dmp::DmpParams;
+use prf_shared::kinematics::ArmKinematics;
+use prf_shared::limits::MotionLimits;
 use prf_shared::motion::{Sample, class};
-use prf_shared::rdmp::{Rdmp, RdmpError, null_space_coordinate};
+use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpError, null_space_coordinate};
 use prf_shared::robot::RobotModel;
+use prf_shared::timing::pace;
 
 /// A trained arm motion and where it came from.
 #[derive(Clone, Debug)]
@@ -54,7 +58,12 @@ pub fn uniform_path(samples: &[Sample]) -> (Vec<[f64; 7]>, f64) {
     (out, dt)
 }
 
-/// TrainRDMP (Alg. 1) on a uniformly sampled joint path.
+/// TrainRDMP (Alg. 1) on a uniformly sampled joint path, then paced: τ is scaled by the
+/// smallest factor at which the RDMP's reproduction of its demonstration (from the path's
+/// first configuration to its last TCP pose, at the runtime's 1 kHz) keeps every joint within
+/// the robot's limits ([`prf_shared::timing::pace`]), so a skill is stored at a pace it can be
+/// executed at. A skill that cannot be paced keeps its demonstrated τ; the planner refuses it
+/// wherever it is too fast.
 pub fn train(
     model: &RobotModel,
     path: &[[f64; 7]],
@@ -64,7 +73,19 @@ pub fn train(
 ) -> Result<Rdmp, RdmpError> {
     let mut gamma = vec![0.0; path.len()];
     null_space_coordinate(model, path, min_manipulability, &mut gamma)?;
-    Rdmp::train(model, path, &gamma, dt, params)
+    let rdmp = Rdmp::train(model, path, &gamma, dt, params)?;
+    let (q0, q1) = (
+        JointVector::from(path[0]),
+        JointVector::from(path[path.len() - 1]),
+    );
+    let goal = ArmKinematics::new(model, &q1).tcp;
+    let limits = MotionLimits::kmr_iiwa(model);
+    Ok(
+        match pace(model, &limits, &RdmpConfig::default(), &rdmp, &q0, &goal) {
+            Ok(t) => rdmp.time_scaled(t.scale),
+            Err(_) => rdmp,
+        },
+    )
 }
 
 /// Index of an arm skill with the same path (within 1e-9 rad) in `arms`.

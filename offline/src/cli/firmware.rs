@@ -53,8 +53,17 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let reports = firmware::check_tasks(&elf, &a.blob, &tasks, &a.dir, a.jobs, |_| bar.inc());
     bar.finish();
     println!(
-        "{:<26} {:>7} {:>9} {:>8} {:>7} {:>8} {:>7} {:>8}  {:>9}  check",
-        "task", "ticks", "plan Mi", "tick max", "mean", "arm mean", "RAM KiB", "crc32", "|Δq| max"
+        "{:<26} {:>7} {:>9} {:>8} {:>7} {:>8} {:>7} {:>8}  {:>9} {:>6}  check",
+        "task",
+        "ticks",
+        "plan Mi",
+        "tick max",
+        "mean",
+        "arm mean",
+        "RAM KiB",
+        "crc32",
+        "|Δq| max",
+        "limit"
     );
     let mut failed = 0;
     let (mut max_tick, mut max_plan, mut max_ram) = (0, 0, 0);
@@ -84,7 +93,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         MAX_STATIC_RAM / 1024
     );
     println!(
-        "(instructions under qemu-system-arm -icount shift=0; |Δq|: firmware vs host setpoints, tolerance {STREAM_TOLERANCE:e} rad; streams in {})",
+        "(instructions under qemu-system-arm -icount shift=0; |Δq|: firmware vs host setpoints, tolerance {STREAM_TOLERANCE:e} rad; limit: the firmware stream's peak ratio to the position, speed, acceleration and jerk limits, 1 ms finite differences; streams in {})",
         a.dir.display()
     );
     if failed > 0 {
@@ -102,14 +111,26 @@ fn print_row(r: &TaskReport) -> bool {
         );
         return false;
     };
-    let violations = firmware::violations(f);
-    let (diff, verdict) = match &r.comparison {
-        Ok(c) if violations.is_empty() => (format!("{:.2e}", c.arm), "ok".to_string()),
-        Ok(c) => (format!("{:.2e}", c.arm), violations.join("; ")),
-        Err(e) => ("-".into(), format!("stream: {e}")),
+    let mut violations = firmware::violations(f);
+    if let Ok(c) = &r.comparison
+        && !c.emitted.within()
+    {
+        violations.push(format!("the stream exceeds the limits: {}", c.emitted));
+    }
+    let (diff, limit, verdict) = match &r.comparison {
+        Ok(c) => (
+            format!("{:.2e}", c.arm),
+            format!("{:.3}", c.emitted.max()),
+            if violations.is_empty() {
+                "ok".to_string()
+            } else {
+                violations.join("; ")
+            },
+        ),
+        Err(e) => ("-".into(), "-".into(), format!("stream: {e}")),
     };
     println!(
-        "{:<26} {:>7} {:>9.1} {:>8} {:>7} {:>8} {:>7.1} {:>8}  {:>9}  {}",
+        "{:<26} {:>7} {:>9.1} {:>8} {:>7} {:>8} {:>7.1} {:>8}  {:>9} {:>6}  {}",
         r.label,
         f.ticks,
         f.planning_instructions as f64 / 1e6,
@@ -119,6 +140,7 @@ fn print_row(r: &TaskReport) -> bool {
         f.ram_total as f64 / 1024.0,
         format!("{:08x}", f.crc32),
         diff,
+        limit,
         verdict
     );
     violations.is_empty() && r.comparison.is_ok()

@@ -7,6 +7,7 @@ use prf_files::dataset::trajectory_csv;
 use prf_host::ideal::execute;
 use prf_runtime::executor::{ExecutorConfig, planar};
 use prf_runtime::plan::{Plan, PlanError, plan};
+use prf_runtime::skill_plan::MAX_TIME_SCALE;
 use prf_runtime::{Runtime, RuntimeConfig};
 use prf_shared::motion::Param;
 use prf_sim::tasks::{FloorTask, world_tasks};
@@ -226,12 +227,29 @@ fn print_plan(rt: &Runtime<'_>, ft: &FloorTask, p: &Plan, took: f64) -> anyhow::
         println!("  pick:  {}", skill(rt, c.pick_skill)?);
         println!("  place: {}", skill(rt, c.place_skill)?);
     }
+    if let Some((t1, t2)) = s.timing {
+        for (what, t) in [("pick", t1), ("place", t2)] {
+            println!(
+                "  {what} timing: τ × {:.3} ({:.2} s), emitted stream at {}",
+                t.scale,
+                t.steps as f64 * rt.config.rdmp.dt,
+                t.ratios
+            );
+        }
+    }
+    if s.choice.is_none() && s.stats.too_fast > 0 {
+        println!(
+            "  refused: {} candidate motions would exceed a joint limit even slowed down to τ × {MAX_TIME_SCALE}",
+            s.stats.too_fast
+        );
+    }
     let st = &s.stats;
     println!(
-        "  work: {} RDMP integrations ({} pruned, {} failed), {} steps, {:.1} ms; the paper's grid: {} integrations ({:.0}× more)",
+        "  work: {} RDMP integrations ({} pruned, {} failed, {} too fast), {} steps, {:.1} ms; the paper's grid: {} integrations ({:.0}× more)",
         st.integrations,
         st.pruned,
         st.failed,
+        st.too_fast,
         st.steps,
         took * 1e3,
         st.grid_integrations,
@@ -250,7 +268,7 @@ fn print_plan(rt: &Runtime<'_>, ft: &FloorTask, p: &Plan, took: f64) -> anyhow::
 fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
     let tasks = world_tasks(world);
     println!(
-        "{:>2}  {:<24} {:<10} {:>9}  {:>7} {:>7} {:>5}  {:>5} {:>5}  {:>6} {:>9}  {:>8}",
+        "{:>2}  {:<24} {:<10} {:>9}  {:>7} {:>7} {:>5}  {:>5} {:>5}  {:>5} {:>6}  {:>6} {:>9}  {:>8}",
         "#",
         "task",
         "class",
@@ -260,6 +278,8 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
         "grasp",
         "pick",
         "place",
+        "τ×",
+        "limit",
         "integr",
         "grid",
         "ms"
@@ -278,8 +298,13 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
                 feasible += s.feasible as usize;
                 let c = s.choice;
                 let f = |v: Option<String>| v.unwrap_or_else(|| "-".into());
+                let (scale, limit) = s.timing.map_or((None, None), |(a, b)| {
+                    let scale = a.scale.max(b.scale);
+                    let limit = a.ratios.max().max(b.ratios.max());
+                    (Some(format!("{scale:.3}")), Some(format!("{limit:.3}")))
+                });
                 println!(
-                    "{:>2}  {:<24} {:<10} {:>9}  {:>7} {:>7} {:>5}  {:>5} {:>5}  {:>6} {:>9}  {:>8.1}",
+                    "{:>2}  {:<24} {:<10} {:>9}  {:>7} {:>7} {:>5}  {:>5} {:>5}  {:>5} {:>6}  {:>6} {:>9}  {:>8.1}",
                     i,
                     ft.label(),
                     if s.feasible { "feasible" } else { "risky" },
@@ -289,6 +314,8 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
                     f(c.map(|c| c.grasp.to_string())),
                     f(c.map(|c| c.pick_skill.to_string())),
                     f(c.map(|c| c.place_skill.to_string())),
+                    f(scale),
+                    f(limit),
                     s.stats.integrations,
                     s.stats.grid_integrations,
                     ms

@@ -18,7 +18,8 @@ use prf_runtime::Runtime;
 use prf_runtime::executor::{Executor, ExecutorConfig, Measured, Mode, Plant, Setpoint};
 use prf_runtime::program::Program;
 use prf_runtime::reverse::Reversal;
-use prf_shared::limits::MotionLimits;
+use prf_shared::NA;
+use prf_shared::limits::{ArmMeter, LimitRatios, MotionLimits};
 use prf_shared::se3::Pose;
 use serde::Serialize;
 
@@ -94,14 +95,38 @@ pub struct CellReport {
     pub wake_late_us: [f64; 4],
     /// Setpoint one-way latency cell → controller, µs: p50, p99, p99.9, max.
     pub latency_us: [f64; 4],
+    /// Ticks whose setpoint the output stage had to change to stay within the limits (0 for a
+    /// planned program: it is emitted as certified), and the largest change, rad.
+    pub shaped: u64,
+    pub max_shaping: f64,
+    /// Peak limit ratios of the emitted stream (1 ms finite differences).
+    #[serde(serialize_with = "ratios_json")]
+    pub emitted: LimitRatios,
+}
+
+/// The limit ratios as a JSON object.
+fn ratios_json<S: serde::Serializer>(r: &LimitRatios, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    let mut m = s.serialize_map(Some(4))?;
+    m.serialize_entry("position", &r.position)?;
+    m.serialize_entry("speed", &r.speed)?;
+    m.serialize_entry("acceleration", &r.acceleration)?;
+    m.serialize_entry("jerk", &r.jerk)?;
+    m.end()
 }
 
 impl CellReport {
-    /// One line: "11.2 s, max tracking error 1.30 mrad, lost 0, …, setpoint latency p50 …".
+    /// One line: "11.2 s, emitted at 0.961 of the limits …, max tracking error 1.30 mrad, lost
+    /// 0, …, setpoint latency p50 …".
     pub fn summary(&self) -> String {
         format!(
-            "{:.1} s, max tracking error {:.2} mrad, lost {}, repeated {}, refused {}, deadline misses {}, wake-up late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, setpoint latency p50 {:.1} µs p99 {:.1} µs max {:.0} µs",
+            "{:.1} s, emitted at {:.3} of the limits (acceleration {:.3}, jerk {:.3}), {} ticks shaped (max {:.2} mrad), max tracking error {:.2} mrad, lost {}, repeated {}, refused {}, deadline misses {}, wake-up late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, setpoint latency p50 {:.1} µs p99 {:.1} µs max {:.0} µs",
             self.duration_s,
+            self.emitted.max(),
+            self.emitted.acceleration,
+            self.emitted.jerk,
+            self.shaped,
+            self.max_shaping * 1e3,
             self.max_tracking_error * 1e3,
             self.lost,
             self.repeated,
@@ -126,15 +151,54 @@ pub struct Cell {
     last: JointStateMsg,
 }
 
-/// The plant of the host cell's executor: the Ruckig output stage in front of the controller,
-/// measured through the newest joint state.
+/// The output stage between the executor and the controller: the executor's plant, its
+/// measured state the newest joint state. A setpoint that keeps the emitted stream within the
+/// position, speed, acceleration and jerk limits (rated by finite differences at 1 ms, as the
+/// controller sees it) passes unchanged: a planned program is certified within the limits, so
+/// what is emitted is what was certified. Otherwise Ruckig shapes it (the safety net; every
+/// shaped tick is counted and reported), and on a fault or a stop request Ruckig brakes from
+/// the emitted state.
 struct OutputStage {
     ruckig: Online,
+    /// Rates the emitted stream.
+    meter: ArmMeter,
     measured: Measured,
     /// Brake instead of tracking (a fault, or a stop on request).
     stopping: bool,
-    /// The output is at rest on its target (set by the last command).
+    /// The output is at rest (set by the last command).
     settled: bool,
+    /// Ticks whose setpoint Ruckig had to change, and the largest change, rad.
+    shaped: u64,
+    max_shaping: f64,
+}
+
+impl OutputStage {
+    fn new(q: &[f64; NA], limits: &MotionLimits, measured: Measured) -> Self {
+        let l = limits;
+        OutputStage {
+            ruckig: Online::new(q, &l.arm_speed, &l.arm_acceleration, &l.arm_jerk),
+            meter: ArmMeter::at_rest(limits, prf_ruckig::DT, q),
+            measured,
+            stopping: false,
+            settled: false,
+            shaped: 0,
+            max_shaping: 0.0,
+        }
+    }
+
+    /// The emitted position and velocity.
+    fn output(&self) -> ([f64; NA], [f64; NA]) {
+        let (q, v, _) = self.meter.state();
+        (*q, *v)
+    }
+
+    /// Emits Ruckig's next sample.
+    fn emit_ruckig(&mut self) -> Result<(), RuckigError> {
+        self.settled = self.ruckig.step()?;
+        let q: [f64; NA] = core::array::from_fn(|j| self.ruckig.position()[j]);
+        self.meter.push(&q);
+        Ok(())
+    }
 }
 
 impl Plant for OutputStage {
@@ -144,14 +208,29 @@ impl Plant for OutputStage {
         self.measured
     }
 
-    /// Tracks the setpoint within the speed, acceleration and jerk limits, or brakes.
+    /// Passes the setpoint when it keeps the stream within the limits, else shapes it with
+    /// Ruckig; brakes on a fault or a stop request.
     fn command(&mut self, sp: &Setpoint) -> Result<(), RuckigError> {
         if sp.mode == Mode::Fault || self.stopping {
             self.ruckig.brake();
-        } else {
-            self.ruckig.track(&sp.arm, &sp.arm_velocity, TRACKING_GAIN);
+            return self.emit_ruckig();
         }
-        self.settled = self.ruckig.step()?;
+        if self.meter.rate(&sp.arm).within() {
+            self.meter.push(&sp.arm);
+            let (q, v, a) = self.meter.state();
+            self.ruckig.set_state(q, v, a);
+            self.settled = v.iter().chain(a).all(|x| *x == 0.0);
+            return Ok(());
+        }
+        self.ruckig.track(&sp.arm, &sp.arm_velocity, TRACKING_GAIN);
+        self.emit_ruckig()?;
+        let (q, _, _) = self.meter.state();
+        let off = q
+            .iter()
+            .zip(&sp.arm)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        self.shaped += 1;
+        self.max_shaping = self.max_shaping.max(off);
         Ok(())
     }
 }
@@ -247,13 +326,7 @@ impl Cell {
     ) -> Result<CellReport, CellError> {
         let mut reversal = Box::new(Reversal::new());
         let mut ex = Executor::new(rt, program.clone(), home, self.cfg.executor, &mut reversal);
-        let l = &self.limits;
-        let mut stage = OutputStage {
-            ruckig: Online::new(&self.last.q, &l.arm_speed, &l.arm_acceleration, &l.arm_jerk),
-            measured: measured(&self.last),
-            stopping: false,
-            settled: false,
-        };
+        let mut stage = OutputStage::new(&self.last.q, &self.limits, measured(&self.last));
         let period = Duration::from_hz(1000);
         let mut timing = Timing::new();
         let mut report = CellReport::default();
@@ -300,7 +373,7 @@ impl Cell {
                 report.stopped = stage.stopping;
             }
             let finished = (ex.done() || report.fault.is_some() || stage.stopping) && stage.settled;
-            self.send(k, &sp, &stage.ruckig, report.fault.is_some(), finished)?;
+            self.send(k, &sp, stage.output(), report.fault.is_some(), finished)?;
             if Instant::now() > scheduled + period {
                 report.deadline_misses += 1;
             }
@@ -311,6 +384,9 @@ impl Cell {
         }
         report.ticks = k;
         report.duration_s = k as f64 * 1e-3;
+        report.shaped = stage.shaped;
+        report.max_shaping = stage.max_shaping;
+        report.emitted = stage.meter.ratios();
         timing.into_report(&mut report);
         Ok(report)
     }
@@ -359,7 +435,7 @@ impl Cell {
         &self,
         k: u64,
         sp: &Setpoint,
-        out: &Online,
+        (q, qd): ([f64; NA], [f64; NA]),
         fault: bool,
         last: bool,
     ) -> Result<(), CellError> {
@@ -376,8 +452,8 @@ impl Cell {
         self.ports.send(SetpointMsg {
             seq: k,
             t_ns: now_ns(),
-            q: core::array::from_fn(|j| out.position()[j]),
-            qd: core::array::from_fn(|j| out.velocity()[j]),
+            q,
+            qd,
             base_goal: sp.base_goal,
             mode: sp.mode as u32,
             flags: f,

@@ -40,11 +40,12 @@ impl Online {
         }
     }
 
-    /// Restarts from the state (position, velocity, acceleration).
+    /// Restarts from the state (position, velocity, acceleration): copied in place, no
+    /// allocation.
     pub fn set_state(&mut self, p: &[f64], v: &[f64], a: &[f64]) {
-        self.input.current_position = p.to_vec();
-        self.input.current_velocity = v.to_vec();
-        self.input.current_acceleration = a.to_vec();
+        self.input.current_position.copy_from_slice(p);
+        self.input.current_velocity.copy_from_slice(v);
+        self.input.current_acceleration.copy_from_slice(a);
     }
 
     /// Drive to `target` (position interface), arriving at rest.

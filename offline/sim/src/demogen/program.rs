@@ -43,6 +43,10 @@ pub struct GenConfig {
     pub min_manipulability: f64,
     /// Re-sampling resolution of the final check, m.
     pub check_resolution: f64,
+    /// Acceleration ramp of the programmed arm motions, s: the jerk filter's window (the
+    /// programs ramp acceleration up and down over this time, well inside the hardware jerk
+    /// limit, as smooth programs on a real cell do; the RDMPs learned from them can follow).
+    pub arm_ramp: f64,
     pub limits: MotionLimits,
     pub ik: IkConfig,
     pub rrt: RrtConfig,
@@ -61,6 +65,7 @@ impl GenConfig {
             edge_resolution: 0.001,
             min_manipulability: 0.03,
             check_resolution: 0.002,
+            arm_ramp: 0.2,
             limits,
             ik: IkConfig::default(),
             rrt: RrtConfig::default(),
@@ -244,6 +249,10 @@ impl<'w> Generator<'w> {
         Limits {
             speed: self.cfg.limits.arm_speed.map(|v| v * scale),
             acceleration: self.cfg.limits.arm_acceleration,
+            jerk: std::array::from_fn(|j| {
+                let a = self.cfg.limits.arm_acceleration[j];
+                self.cfg.limits.arm_jerk[j].min(2.0 * a / self.cfg.arm_ramp)
+            }),
         }
     }
 
@@ -382,6 +391,7 @@ impl<'w> Generator<'w> {
         let limits = Limits {
             speed: self.cfg.limits.base_speed,
             acceleration: self.cfg.limits.base_acceleration,
+            jerk: self.cfg.limits.base_jerk,
         };
         let blended = Motion::new(&w, &limits, true);
         let ok = |m: &Motion<3>| self.piece_ok(Piece::Base(m.clone()));

@@ -1,13 +1,18 @@
-//! Time parameterisation of a joint-space polyline within speed and acceleration limits:
-//! linear segments joined by parabolic blends around the via points (LSPB), synchronised over
-//! all axes. Velocity is continuous; every axis stays within its speed and acceleration limit.
-//! With `blend = false` the motion stops at every via point and follows the polyline exactly.
+//! Time parameterisation of a joint-space polyline within speed, acceleration and jerk
+//! limits: linear segments joined by parabolic blends around the via points (LSPB),
+//! synchronised over all axes, then smoothed by a moving average over a window w, as a
+//! controller's jerk filter does. The LSPB's acceleration is piecewise constant with
+//! |a| ≤ a_max; the average's jerk is (a(t) − a(t − w))/w, so w = 2·a_max/j_max keeps every
+//! axis within its jerk limit, and averaging keeps speed and acceleration within theirs. The
+//! motion starts and ends at rest with zero acceleration. With `blend = false` the LSPB stops
+//! at every via point and follows the polyline exactly.
 
 /// Per-axis limits.
 #[derive(Clone, Copy, Debug)]
 pub struct Limits<const N: usize> {
     pub speed: [f64; N],
     pub acceleration: [f64; N],
+    pub jerk: [f64; N],
 }
 
 /// One LSPB motion through a polyline.
@@ -111,27 +116,79 @@ fn velocities<const N: usize>(w: &[[f64; N]], seg: &[f64]) -> Vec<[f64; N]> {
         .collect()
 }
 
-/// A timed motion: one blended LSPB, or one LSPB per segment (exact stops at via points).
+/// A timed motion: one blended LSPB, or one LSPB per segment (exact stops at via points),
+/// smoothed by the jerk filter.
 #[derive(Clone, Debug)]
 pub struct Motion<const N: usize> {
     pieces: Vec<Lspb<N>>,
+    /// Window w of the moving average, s.
+    window: f64,
+    /// Times where the LSPB's acceleration jumps (blend ends, piece ends), sorted: between
+    /// them its position is a quadratic.
+    breaks: Vec<f64>,
 }
 
 impl<const N: usize> Motion<N> {
     pub fn new(waypoints: &[[f64; N]], limits: &Limits<N>, blend: bool) -> Self {
-        let pieces = if blend || waypoints.len() <= 2 {
+        let pieces: Vec<Lspb<N>> = if blend || waypoints.len() <= 2 {
             vec![Lspb::new(waypoints, limits)]
         } else {
             waypoints.windows(2).map(|w| Lspb::new(w, limits)).collect()
         };
-        Motion { pieces }
+        let window = (0..N)
+            .map(|j| 2.0 * limits.acceleration[j] / limits.jerk[j])
+            .fold(0.0, f64::max);
+        let mut breaks = vec![0.0];
+        let mut start = 0.0;
+        for p in &pieces {
+            for (&ti, &bi) in p.via_time.iter().zip(&p.blend) {
+                breaks.extend([start + ti - bi / 2.0, start + ti + bi / 2.0]);
+            }
+            start += p.duration();
+            breaks.push(start);
+        }
+        breaks.sort_by(f64::total_cmp);
+        Motion {
+            pieces,
+            window,
+            breaks,
+        }
     }
 
+    /// Duration of the smoothed motion: the LSPB's plus the filter window.
     pub fn duration(&self) -> f64 {
+        self.lspb_duration() + self.window
+    }
+
+    fn lspb_duration(&self) -> f64 {
         self.pieces.iter().map(Lspb::duration).sum()
     }
 
-    pub fn at(&self, mut t: f64) -> [f64; N] {
+    /// Position at time t (clamped to [0, duration]): the mean of the LSPB over [t − w, t],
+    /// integrated exactly (two-point Gauss–Legendre on each quadratic piece).
+    pub fn at(&self, t: f64) -> [f64; N] {
+        let t = t.clamp(0.0, self.duration());
+        if self.window <= 0.0 {
+            return self.lspb_at(t);
+        }
+        let (a, b) = (t - self.window, t);
+        let mut sum = [0.0; N];
+        let mut lo = a;
+        let inside = self.breaks.iter().copied().filter(|&x| x > a && x < b);
+        for hi in inside.chain(std::iter::once(b)) {
+            let (m, h) = ((lo + hi) / 2.0, (hi - lo) / 2.0);
+            let g = h / 3f64.sqrt();
+            let (p, q) = (self.lspb_at(m - g), self.lspb_at(m + g));
+            for j in 0..N {
+                sum[j] += h * (p[j] + q[j]);
+            }
+            lo = hi;
+        }
+        sum.map(|v| v / self.window)
+    }
+
+    /// Position of the unfiltered LSPB at time t (held before 0 and after its end).
+    fn lspb_at(&self, mut t: f64) -> [f64; N] {
         for p in &self.pieces {
             let d = p.duration();
             if t <= d {

@@ -1,0 +1,232 @@
+//! Timing of an RDMP motion within the joint limits: the stream an RDMP integration emits at
+//! 1 kHz is rated against [`MotionLimits`] ([`ArmMeter`]), and an RDMP too fast for them is
+//! slowed down by scaling its time constant τ ([`Rdmp::time_scaled`]: the same path, speeds
+//! ÷ s, accelerations ÷ s², jerks ÷ s³). A motion runs for its τ and then on until the arm can
+//! stop within the jerk limit (the DMPs settle on their goals), so the stream starts and ends
+//! at rest.
+//!
+//! The compiler paces every learned skill this way on its own demonstration; the planner times
+//! every candidate motion the same way before it takes its risk.
+
+use crate::kinematics::ArmKinematics;
+use crate::limits::{ArmMeter, LimitRatios, MotionLimits};
+use crate::rdmp::{Rdmp, RdmpConfig, RdmpError, RdmpRun};
+use crate::robot::RobotModel;
+use crate::se3::Pose;
+use crate::{JointVector, NA};
+
+/// Largest time scale applied to a motion before it is refused as too fast: τ at most 4 × the
+/// RDMP's own.
+pub const MAX_TIME_SCALE: f64 = 4.0;
+/// Time scales tried per motion before it is refused as too fast.
+pub const MAX_TRIALS: usize = 4;
+
+/// How an arm motion is timed: the time scale of its RDMP, its ticks (τ × scale, then on until
+/// the arm can stop within the jerk limit, at most τ more) and the limit ratios of exactly the
+/// stream it emits, standstill before and after included.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArmTiming {
+    /// Time scale s (τ_run = s · τ), ≥ 1.
+    pub scale: f64,
+    /// Ticks of the motion.
+    pub steps: u32,
+    /// Peak ratios of position, speed, acceleration and jerk to the limits (all ≤ 1).
+    pub ratios: LimitRatios,
+}
+
+/// What one integration at a fixed time scale came to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Run {
+    /// Integrated to rest within the limits.
+    Within(ArmTiming),
+    /// The stream exceeds a limit: the ratios reached after `steps` steps (the run stops
+    /// early once even [`MAX_TIME_SCALE`] could not help).
+    TooFast {
+        /// Steps taken.
+        steps: usize,
+        /// Peak ratios reached.
+        ratios: LimitRatios,
+    },
+    /// The RDMP could not be integrated.
+    Failed(RdmpError),
+}
+
+/// Integrates `rdmp` (already time-scaled by `scale`) from `q0` to `goal` (arm base frame),
+/// rating its stream, and shows `observe` the kinematics of every configuration it emits,
+/// q0 first and the final one last.
+#[allow(clippy::too_many_arguments)]
+pub fn run_at(
+    model: &RobotModel,
+    limits: &MotionLimits,
+    cfg: &RdmpConfig,
+    rdmp: &Rdmp,
+    q0: &JointVector,
+    goal: &Pose,
+    scale: f64,
+    mut observe: impl FnMut(&ArmKinematics),
+) -> Run {
+    let mut run = match RdmpRun::new(model, rdmp, q0, goal, cfg) {
+        Ok(r) => r,
+        Err(e) => return Run::Failed(e),
+    };
+    let nominal = run.progress().1;
+    let mut meter = ArmMeter::at_rest(limits, cfg.dt, &(*q0).into());
+    let mut steps = 0;
+    // Each step shows the FK of the configuration it leaves: q_0 … q_{n−1}; q_n comes last.
+    loop {
+        let q = match run.step_observed(model, rdmp, cfg, &mut observe) {
+            Ok(s) => s.q,
+            Err(e) => return Run::Failed(e),
+        };
+        steps += 1;
+        meter.push(&q.into());
+        if hopeless(&meter.ratios(), scale) {
+            return Run::TooFast {
+                steps,
+                ratios: meter.ratios(),
+            };
+        }
+        if steps >= nominal {
+            if meter.stop_ratios().within() || steps >= 2 * nominal {
+                break;
+            }
+            run.set_steps(steps + 1);
+        }
+    }
+    meter.stop();
+    let q: [f64; NA] = *meter.last();
+    observe(&ArmKinematics::new(model, &JointVector::from(q)));
+    if !meter.ratios().within() {
+        return Run::TooFast {
+            steps,
+            ratios: meter.ratios(),
+        };
+    }
+    Run::Within(ArmTiming {
+        scale,
+        steps: steps as u32,
+        ratios: meter.ratios(),
+    })
+}
+
+/// The factor by which a stream that reached `r` must be slowed down: speed scales with 1/s,
+/// acceleration with 1/s², jerk with 1/s³.
+fn slow_down(r: &LimitRatios) -> f64 {
+    r.speed
+        .max(libm::sqrt(r.acceleration))
+        .max(libm::cbrt(r.jerk))
+}
+
+/// True when even [`MAX_TIME_SCALE`] cannot bring a stream at `scale` within the limits (or a
+/// ratio is NaN): integrating on would be wasted.
+fn hopeless(r: &LimitRatios, scale: f64) -> bool {
+    !(scale * slow_down(r) <= MAX_TIME_SCALE && r.position <= 1.0)
+}
+
+/// The next time scale to try after a stream at `scale` reached `ratios` (the scaling laws
+/// with a 2 % margin, at least 2 % slower); `None` beyond [`MAX_TIME_SCALE`].
+pub fn next_scale(scale: f64, ratios: &LimitRatios) -> Option<f64> {
+    let next = scale * (1.02 * slow_down(ratios)).max(1.02);
+    (next <= MAX_TIME_SCALE).then_some(next)
+}
+
+/// Why a motion could not be timed within the limits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TimingError {
+    /// Even slowed down to the last scale tried the stream exceeds a limit.
+    TooFast {
+        /// The last time scale tried.
+        scale: f64,
+        /// The ratios it reached.
+        ratios: LimitRatios,
+    },
+    /// The RDMP could not be integrated.
+    Rdmp(RdmpError),
+}
+
+impl core::fmt::Display for TimingError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            TimingError::TooFast { scale, ratios } => write!(
+                f,
+                "the motion exceeds a joint limit even slowed down to τ × {scale:.2} ({ratios})"
+            ),
+            TimingError::Rdmp(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl core::error::Error for TimingError {}
+
+/// A motion timed by [`pace_observed`]: the timing (or why there is none), the observer of the
+/// last run (the one whose stream is the timing's) and the steps of all runs.
+#[derive(Clone, Copy, Debug)]
+pub struct Paced<O> {
+    /// The timing within the limits, or why there is none.
+    pub timing: Result<ArmTiming, TimingError>,
+    /// What observed the last run.
+    pub observer: O,
+    /// Integration steps of all runs.
+    pub steps: usize,
+}
+
+/// The smallest time scale on the ladder 1, [`next_scale`], … at which `rdmp` from `q0` to
+/// `goal` stays within `limits`, with its timing. Each run gets a `fresh()` observer that
+/// `observe` shows every configuration's kinematics.
+#[allow(clippy::too_many_arguments)]
+pub fn pace_observed<O>(
+    model: &RobotModel,
+    limits: &MotionLimits,
+    cfg: &RdmpConfig,
+    rdmp: &Rdmp,
+    q0: &JointVector,
+    goal: &Pose,
+    mut fresh: impl FnMut() -> O,
+    mut observe: impl FnMut(&mut O, &ArmKinematics),
+) -> Paced<O> {
+    let mut scale = 1.0;
+    let mut steps = 0;
+    let mut trials = 0;
+    loop {
+        let mut observer = fresh();
+        let scaled = rdmp.time_scaled(scale);
+        let run = run_at(model, limits, cfg, &scaled, q0, goal, scale, |k| {
+            observe(&mut observer, k)
+        });
+        trials += 1;
+        let timing = match run {
+            Run::Within(t) => {
+                steps += t.steps as usize;
+                Ok(t)
+            }
+            Run::Failed(e) => Err(TimingError::Rdmp(e)),
+            Run::TooFast { steps: n, ratios } => {
+                steps += n;
+                match next_scale(scale, &ratios) {
+                    Some(s) if trials < MAX_TRIALS => {
+                        scale = s;
+                        continue;
+                    }
+                    _ => Err(TimingError::TooFast { scale, ratios }),
+                }
+            }
+        };
+        return Paced {
+            timing,
+            observer,
+            steps,
+        };
+    }
+}
+
+/// [`pace_observed`] without an observer.
+pub fn pace(
+    model: &RobotModel,
+    limits: &MotionLimits,
+    cfg: &RdmpConfig,
+    rdmp: &Rdmp,
+    q0: &JointVector,
+    goal: &Pose,
+) -> Result<ArmTiming, TimingError> {
+    pace_observed(model, limits, cfg, rdmp, q0, goal, || (), |_, _| {}).timing
+}
