@@ -227,7 +227,7 @@ pub fn run(a: &Args) -> Result<()> {
     let allocs = (allocations() - a0) as f64 / ideal.setpoints.len() as f64;
     let r = percentiles(&mut times);
     println!(
-        "\nRuckig output stage (7 axes, velocity interface), {} updates of a {:.1} s program: median {:.2} µs, p99 {:.2} µs, max {:.1} µs; {allocs:.1} allocations per update (the crate's Vec wrapper)",
+        "\nRuckig as the output stage's safety net (7 axes, velocity interface; a planned program passes without it), {} updates along a {:.1} s program: median {:.2} µs, p99 {:.2} µs, max {:.1} µs; {allocs:.1} allocations per update (the crate's Vec wrapper)",
         ideal.setpoints.len(),
         ideal.setpoints.len() as f64 * 1e-3,
         r[0],
@@ -239,7 +239,11 @@ pub fn run(a: &Args) -> Result<()> {
     let cell_name = format!("bench-{}", std::process::id());
     let log = std::env::temp_dir().join(format!("prf-firmware-sim-{cell_name}.log"));
     let _fw = ChildGuard(spawn_firmware(&cell_name, planar(&ft.home), &log)?);
-    let mut cell = Cell::connect(CellConfig::new(&cell_name), &rt)?;
+    let cfg = CellConfig {
+        alloc_probe: Some(crate::bench::alloc_count::thread_allocations),
+        ..CellConfig::new(&cell_name)
+    };
+    let mut cell = Cell::connect(cfg, &rt)?;
     println!(
         "\n1 kHz host cell loop against firmware-sim for ≥ {:.0} s (task {} repeated):",
         a.loop_seconds,
@@ -250,7 +254,10 @@ pub fn run(a: &Args) -> Result<()> {
         let a0 = allocations();
         let r = cell.execute(&rt, &program, &ft.home)?;
         let per_tick = (allocations() - a0) as f64 / r.ticks.max(1) as f64;
-        println!("  {}; {per_tick:.1} allocations per tick", r.summary());
+        println!(
+            "  {}; process-wide (every thread, start-up included) {per_tick:.2} allocations per tick",
+            r.summary()
+        );
         if let Some(f) = &r.fault {
             bail!("the run faulted: {f}");
         }

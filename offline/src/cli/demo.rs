@@ -68,7 +68,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         planar(&world.home.pose()),
         &log,
     )?);
-    let mut cell = Cell::connect(CellConfig::new(&cell_name), &rt)?;
+    let cfg = CellConfig {
+        alloc_probe: Some(crate::bench::alloc_count::thread_allocations),
+        ..CellConfig::new(&cell_name)
+    };
+    let mut cell = Cell::connect(cfg, &rt)?;
     println!(
         "firmware-sim: pid {}, cell {cell_name:?}, log {}",
         child.0.id(),

@@ -58,6 +58,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         None
     };
     let mut cfg = CellConfig::new(&a.cell);
+    cfg.alloc_probe = Some(crate::bench::alloc_count::thread_allocations);
     cfg.dead_after_ms = a.dead_after;
     cfg.silent_after_ms = a.silent_after;
     cfg.stop_after = a.stop_after.map(std::time::Duration::from_secs_f64);

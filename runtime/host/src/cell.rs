@@ -8,6 +8,7 @@
 //! watchdog or its limit check stopped the arm, stops the cell with a fault. Deadline misses
 //! (a setpoint published after its 1 ms period ended) are counted, never hidden.
 
+use crate::liveness::Liveness;
 use crate::{pacing, stats};
 use embassy_time::{Duration, Instant, Ticker};
 use prf_ipc::clock::now_ns;
@@ -34,6 +35,8 @@ pub enum CellError {
         "no joint state on prf/{cell}/joint-state within {seconds:.1} s: is `prf firmware-sim --cell {cell}` running?"
     )]
     NoController { cell: String, seconds: f64 },
+    #[error("starting the controller liveness thread failed")]
+    Thread(#[source] std::io::Error),
 }
 
 /// Position gain of the Ruckig output stage, 1/s (see [`Online::track`]).
@@ -55,6 +58,9 @@ pub struct CellConfig {
     pub connect_timeout: std::time::Duration,
     /// Stop (brake, end the session) after this long, if set.
     pub stop_after: Option<std::time::Duration>,
+    /// Allocations so far on the calling thread, if the binary counts them: the report then
+    /// gives the loop's own ([`CellReport::loop_allocations`]).
+    pub alloc_probe: Option<fn() -> u64>,
 }
 
 impl CellConfig {
@@ -66,6 +72,7 @@ impl CellConfig {
             silent_after_ms: 100.0,
             connect_timeout: std::time::Duration::from_secs(5),
             stop_after: None,
+            alloc_probe: None,
         }
     }
 }
@@ -99,6 +106,9 @@ pub struct CellReport {
     /// planned program: it is emitted as certified), and the largest change, rad.
     pub shaped: u64,
     pub max_shaping: f64,
+    /// Allocations on the loop's thread from its first tick to its last (with
+    /// [`CellConfig::alloc_probe`]).
+    pub loop_allocations: Option<u64>,
     /// Peak limit ratios of the emitted stream (1 ms finite differences).
     #[serde(serialize_with = "ratios_json")]
     pub emitted: LimitRatios,
@@ -119,8 +129,14 @@ impl CellReport {
     /// One line: "11.2 s, emitted at 0.961 of the limits …, max tracking error 1.30 mrad, lost
     /// 0, …, setpoint latency p50 …".
     pub fn summary(&self) -> String {
+        let allocations = self.loop_allocations.map_or(String::new(), |n| {
+            format!(
+                ", {n} allocations in the loop ({:.2} per tick)",
+                n as f64 / self.ticks.max(1) as f64
+            )
+        });
         format!(
-            "{:.1} s, emitted at {:.3} of the limits (acceleration {:.3}, jerk {:.3}), {} ticks shaped (max {:.2} mrad), max tracking error {:.2} mrad, lost {}, repeated {}, refused {}, deadline misses {}, wake-up late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, setpoint latency p50 {:.1} µs p99 {:.1} µs max {:.0} µs",
+            "{:.1} s, emitted at {:.3} of the limits (acceleration {:.3}, jerk {:.3}), {} ticks shaped (max {:.2} mrad), max tracking error {:.2} mrad, lost {}, repeated {}, refused {}, deadline misses {}, wake-up late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, setpoint latency p50 {:.1} µs p99 {:.1} µs max {:.0} µs{}",
             self.duration_s,
             self.emitted.max(),
             self.emitted.acceleration,
@@ -137,7 +153,8 @@ impl CellReport {
             self.wake_late_us[3],
             self.latency_us[0],
             self.latency_us[1],
-            self.latency_us[3]
+            self.latency_us[3],
+            allocations
         )
     }
 }
@@ -149,6 +166,7 @@ pub struct Cell {
     pub cfg: CellConfig,
     limits: MotionLimits,
     last: JointStateMsg,
+    liveness: Liveness,
 }
 
 /// The output stage between the executor and the controller: the executor's plant, its
@@ -297,12 +315,14 @@ impl Cell {
             }
             std::thread::sleep(std::time::Duration::from_millis(1));
         };
+        let liveness = Liveness::start(&cfg.cell).map_err(CellError::Thread)?;
         Ok(Cell {
             _node: node,
             ports,
             cfg,
             limits: MotionLimits::kmr_iiwa(&rt.model),
             last,
+            liveness,
         })
     }
 
@@ -332,9 +352,12 @@ impl Cell {
         let mut report = CellReport::default();
         let parker = pacing::Parker::new();
         let mut last_rx = std::time::Instant::now();
+        let mut asked = None;
         let mut seen_sp = 0u64;
         let stop_ticks = self.cfg.stop_after.map(|d| d.as_millis() as u64);
         let mut ticker = Ticker::every(period);
+        let probe = self.cfg.alloc_probe;
+        let allocations_before = probe.map(|f| f());
         let t0 = Instant::now();
         let mut k = 0u64;
         loop {
@@ -345,6 +368,7 @@ impl Cell {
             timing.late(woke.saturating_duration_since(scheduled).as_micros() as f64);
             if self.receive()? {
                 last_rx = std::time::Instant::now();
+                asked = None;
             }
             let js = self.last;
             if js.setpoint_seq > seen_sp && js.setpoint_seq <= k {
@@ -356,7 +380,9 @@ impl Cell {
             }
             // Silence in wall time, not ticks: after a late wake-up the ticker catches up with
             // ticks in quick succession, faster than the controller answers.
-            if let Some(why) = self.controller_stop(last_rx.elapsed().as_secs_f64() * 1e3)? {
+            if let Some(why) =
+                self.controller_stop(last_rx.elapsed().as_secs_f64() * 1e3, &mut asked)
+            {
                 // No controller to brake with: nothing more is sent.
                 report.fault = Some(why);
                 report.fault_t_ns = Some(now_ns());
@@ -382,6 +408,7 @@ impl Cell {
                 break;
             }
         }
+        report.loop_allocations = probe.zip(allocations_before).map(|(f, a)| f() - a);
         report.ticks = k;
         report.duration_s = k as f64 * 1e-3;
         report.shaped = stage.shaped;
@@ -402,11 +429,16 @@ impl Cell {
 
     /// Why the controller can no longer be commanded, after `silent` ms without a joint state:
     /// it is dead or silent, or it stopped the arm itself (watchdog, refused setpoint).
-    fn controller_stop(&self, silent: f64) -> Result<Option<String>, CellError> {
+    /// After `dead_after_ms` of silence the liveness helper is asked once (`asked` holds the
+    /// question until a joint state comes); its answer "dead" stops the cell.
+    fn controller_stop(&self, silent: f64, asked: &mut Option<u64>) -> Option<String> {
         let js = &self.last;
-        let dead = silent >= self.cfg.dead_after_ms
-            && (silent >= self.cfg.silent_after_ms || !link::controller_alive(&self.cfg.cell)?);
-        Ok(if dead {
+        let dead = silent >= self.cfg.silent_after_ms
+            || (silent >= self.cfg.dead_after_ms && {
+                let q = *asked.get_or_insert_with(|| self.liveness.ask());
+                self.liveness.answer(q) == Some(false)
+            });
+        if dead {
             Some(format!(
                 "firmware-sim {}: no joint state for {silent:.1} ms (last seq {})",
                 if silent >= self.cfg.silent_after_ms {
@@ -427,7 +459,7 @@ impl Cell {
             ))
         } else {
             None
-        })
+        }
     }
 
     /// Publishes tick `k`'s output-stage state with the executor's mode and gripper command.

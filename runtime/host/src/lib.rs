@@ -3,6 +3,7 @@
 //! - [`cell`]: the host cell, the executor in a 1 kHz loop streaming setpoints through a
 //!   Ruckig output stage over iceoryx2 to the joint controller (receive → tick → output stage →
 //!   send);
+//! - [`liveness`]: whether the controller's process is alive, asked off the loop;
 //! - [`pacing`]: embassy-time's `Ticker` without an async executor;
 //! - [`ideal`]: a program run tick by tick on the runtime's ideal cell (`prf plan --export`,
 //!   tests);
@@ -10,5 +11,6 @@
 
 pub mod cell;
 pub mod ideal;
+pub mod liveness;
 pub mod pacing;
 pub mod stats;
