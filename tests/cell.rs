@@ -72,6 +72,7 @@ fn firmware(cell: &str, watchdog: u32) -> Proc {
     Proc(
         prf()
             .args(["firmware-sim", "--cell", cell, "--exit-with-parent"])
+            .args(["--world", "example"])
             .arg(format!("--watchdog={watchdog}"))
             .arg(format!("--base={},{},{}", home[0], home[1], home[2]))
             .arg("--log")
@@ -222,6 +223,13 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
     assert_eq!(r["rejected"], 0, "{r}");
     let track = r["max_tracking_error"].as_f64().unwrap();
     assert!(track <= 1e-2, "tracking error {track} rad");
+    // firmware-sim navigates on the example cell's floor map: every drive keeps r = 30 mm
+    // (less half its 10 mm check step) from every box, as the controller measured it.
+    let drive = r["min_drive_clearance"]
+        .as_f64()
+        .expect("drives on the map");
+    println!("drives kept ≥ {:.1} mm", drive * 1e3);
+    assert!(drive >= 0.025, "drive clearance {drive} m");
 
     // The setpoints as the controller saw them: 1, 2, 3, …, within the position, speed,
     // acceleration and jerk limits (1 ms finite differences from and to standstill) and

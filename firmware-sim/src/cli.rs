@@ -3,6 +3,7 @@
 
 use crate::controller::{self, Config};
 use crate::servo::ServoConfig;
+use prf_sim::world::World;
 use std::path::PathBuf;
 
 /// Simulated KUKA iiwa joint controller: tracks the cell's setpoints from iceoryx2 shared
@@ -35,10 +36,14 @@ pub struct Args {
     /// Exit when the parent process exits.
     #[arg(long)]
     pub exit_with_parent: bool,
+    /// World file of the cell (or `example`, the built-in example cell): the platform
+    /// navigates on its floor map. Without one it drives straight lines between goals.
+    #[arg(long)]
+    pub world: Option<PathBuf>,
 }
 
 impl Args {
-    pub fn config(&self) -> Config {
+    pub fn config(&self) -> Result<Config, controller::ControllerError> {
         let mut c = Config::new(&self.cell);
         c.servo = ServoConfig {
             bandwidth_hz: self.bandwidth,
@@ -52,7 +57,12 @@ impl Args {
             c.log = l.clone();
         }
         c.exit_with_parent = self.exit_with_parent;
-        c
+        c.world = match &self.world {
+            None => None,
+            Some(p) if p.as_os_str() == "example" => Some(World::example()),
+            Some(p) => Some(World::load(p)?),
+        };
+        Ok(c)
     }
 }
 
@@ -72,12 +82,23 @@ fn parse_pose(s: &str) -> Result<[f64; 3], String> {
 
 /// Runs the controller and prints its summary.
 pub fn run(args: &Args) -> Result<(), controller::ControllerError> {
-    let cfg = args.config();
+    let cfg = args.config()?;
     eprintln!(
         "prf firmware-sim: cell {:?}, log {}",
         cfg.cell,
         cfg.log.display()
     );
+    match (&cfg.world, &args.world) {
+        (Some(w), Some(p)) => eprintln!(
+            "prf firmware-sim: the platform navigates on the floor map of {} ({} locations), keeping {:.0} mm",
+            p.display(),
+            w.locations.len(),
+            w.clearance.acceptable * 1e3
+        ),
+        _ => eprintln!(
+            "prf firmware-sim: no world file (--world): the platform drives straight lines between goals, blind to obstacles"
+        ),
+    }
     let s = controller::run(&cfg)?;
     eprintln!("prf firmware-sim: {s}");
     Ok(())

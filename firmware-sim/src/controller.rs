@@ -5,6 +5,7 @@
 //! measured state. A refused setpoint also brakes; the next session (flag FIRST) clears it.
 
 use crate::guard::{Admission, Guard};
+use crate::platform::Platform;
 use crate::servo::{ArmServo, ServoConfig};
 use iceoryx2::prelude::*;
 use iceoryx2::waitset::WaitSetRunResult;
@@ -15,7 +16,6 @@ use prf_ruckig::{DT, Online, RuckigError};
 use prf_shared::NA;
 use prf_shared::limits::MotionLimits;
 use prf_shared::robot::RobotModel;
-use prf_shared::se3::wrap;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -37,6 +37,8 @@ pub enum ControllerError {
     },
     #[error("writing the log")]
     Log(#[from] std::io::Error),
+    #[error("reading the world file")]
+    World(#[from] prf_sim::world::WorldError),
 }
 
 /// The result of a controller operation.
@@ -58,6 +60,8 @@ pub struct Config {
     pub log: PathBuf,
     /// Exit when the parent process goes away (for children of `prf demo` and tests).
     pub exit_with_parent: bool,
+    /// The cell's world: the platform navigates on its floor map (None: straight lines).
+    pub world: Option<prf_sim::world::World>,
 }
 
 impl Config {
@@ -70,6 +74,7 @@ impl Config {
             base: [0.0; 3],
             log: std::env::temp_dir().join(format!("prf-firmware-sim-{cell}.log")),
             exit_with_parent: false,
+            world: None,
         }
     }
 }
@@ -81,7 +86,7 @@ struct Plant {
     q_ref: [f64; NA],
     qd_ref: [f64; NA],
     qdd_ref: [f64; NA],
-    base: Online,
+    platform: Platform,
     base_goal: [f64; 3],
     gripper: f64,
     close: bool,
@@ -104,12 +109,7 @@ impl Plant {
             q_ref: model.home,
             qd_ref: [0.0; NA],
             qdd_ref: [0.0; NA],
-            base: Online::new(
-                &cfg.base,
-                &limits.base_speed,
-                &limits.base_acceleration,
-                &limits.base_jerk,
-            ),
+            platform: Platform::new(cfg.base, &limits, cfg.world.as_ref()),
             base_goal: cfg.base,
             gripper: 0.0,
             close: false,
@@ -130,10 +130,8 @@ impl Plant {
         self.close = sp.flags & flags::GRIPPER_CLOSE != 0;
         if sp.base_goal != self.base_goal {
             self.base_goal = sp.base_goal;
-            let yaw = self.base.current().0[2];
-            let goal_yaw = yaw + wrap(sp.base_goal[2] - yaw);
-            self.base
-                .go_to(&[sp.base_goal[0], sp.base_goal[1], goal_yaw]);
+            let holding = self.holding();
+            self.platform.go_to(sp.base_goal, &self.servo.q, holding);
         }
     }
 
@@ -158,7 +156,7 @@ impl Plant {
         b.set_state(&self.q_ref, &self.qd_ref, &a);
         b.brake();
         self.brake = Some(b);
-        self.base.brake();
+        self.platform.brake();
     }
 
     /// One cycle of everything.
@@ -173,7 +171,7 @@ impl Plant {
         }
         self.servo
             .step(&self.q_ref, &self.qd_ref, &self.qdd_ref, DT);
-        self.base.step()?;
+        self.platform.step()?;
         let dir = if self.close { 1.0 } else { -1.0 };
         self.gripper = (self.gripper + dir * self.gripper_rate * DT).clamp(0.0, 1.0);
         Ok(())
@@ -186,8 +184,17 @@ impl Plant {
     }
 
     fn base_pose(&self) -> [f64; 3] {
-        let p = self.base.current().0;
-        [p[0], p[1], wrap(p[2])]
+        self.platform.pose()
+    }
+
+    /// The gripper is closed far enough to hold a part.
+    fn holding(&self) -> bool {
+        self.gripper >= 0.95
+    }
+
+    /// The robot's clearance while the platform drives on a map (NaN otherwise).
+    fn drive_clearance(&self) -> f64 {
+        self.platform.clearance(&self.servo.q, self.holding())
     }
 }
 
@@ -202,6 +209,9 @@ pub struct Summary {
     pub rejected: u64,
     pub watchdog_trips: u32,
     pub max_tracking_error: f64,
+    /// Drives on the floor map, and the smallest clearance any of them kept, m.
+    pub drives: u32,
+    pub min_drive_clearance: f64,
 }
 
 /// What a setpoint did.
@@ -238,6 +248,10 @@ struct Controller<'c> {
     window_latency: u64,
     last_sp_seq: u64,
     last_latency: u64,
+    /// Smallest clearance of the drive under way (NaN: not driving), and whether the current
+    /// goal's missing path was logged.
+    drive_min: f64,
+    no_path_logged: bool,
 }
 
 impl<'c> Controller<'c> {
@@ -280,6 +294,8 @@ impl<'c> Controller<'c> {
             window_latency: 0,
             last_sp_seq: 0,
             last_latency: 0,
+            drive_min: f64::NAN,
+            no_path_logged: false,
         })
     }
 
@@ -296,12 +312,47 @@ impl<'c> Controller<'c> {
         Ok(())
     }
 
+    /// Counts drives (a drive that runs on into the next goal without stopping counts once),
+    /// logs each one's smallest clearance when it ends, and logs a goal without a path.
+    fn watch_drive(&mut self, clearance: f64) -> Result<()> {
+        if !clearance.is_nan() {
+            if self.drive_min.is_nan() {
+                self.summary.drives += 1;
+            }
+            self.drive_min = self.drive_min.min(clearance);
+            if self.summary.drives == 1 || clearance < self.summary.min_drive_clearance {
+                self.summary.min_drive_clearance = self.drive_min;
+            }
+        } else if !self.drive_min.is_nan() {
+            let (m, p) = (self.drive_min, self.plant.base_pose());
+            self.drive_min = f64::NAN;
+            self.event(format_args!(
+                "drive ended at ({:.3}, {:.3}, {:.1}°): smallest clearance {:.1} mm",
+                p[0],
+                p[1],
+                p[2].to_degrees(),
+                m * 1e3
+            ))?;
+        }
+        match self.plant.platform.no_path().map(|e| e.to_string()) {
+            Some(why) if !self.no_path_logged => {
+                self.no_path_logged = true;
+                self.event(format_args!("platform: {why}"))?;
+            }
+            None => self.no_path_logged = false,
+            _ => {}
+        }
+        Ok(())
+    }
+
     /// Publishes the measured state of this cycle.
     fn publish(&mut self, sp_seq: u64, latency: u64) -> Result<()> {
         self.js_seq += 1;
         self.summary.cycles += 1;
         let e = self.plant.tracking_error();
         self.summary.max_tracking_error = self.summary.max_tracking_error.max(e);
+        let clearance = self.plant.drive_clearance();
+        self.watch_drive(clearance)?;
         self.ports.publish(JointStateMsg {
             seq: self.js_seq,
             t_ns: now_ns(),
@@ -312,7 +363,13 @@ impl<'c> Controller<'c> {
             base: self.plant.base_pose(),
             gripper: self.plant.gripper,
             tracking_error: e,
-            status: self.state_bits,
+            drive_clearance: clearance,
+            status: self.state_bits
+                | if self.plant.platform.no_path().is_some() {
+                    status::NO_PATH
+                } else {
+                    0
+                },
             lost: self.guard.lost,
             repeated: self.guard.repeated,
             rejected: self.guard.rejected,
@@ -451,7 +508,16 @@ impl std::fmt::Display for Summary {
             self.rejected,
             self.watchdog_trips,
             self.max_tracking_error * 1e3
-        )
+        )?;
+        if self.drives > 0 {
+            write!(
+                f,
+                ", {} drives on the floor map, smallest clearance {:.1} mm",
+                self.drives,
+                self.min_drive_clearance * 1e3
+            )?;
+        }
+        Ok(())
     }
 }
 

@@ -612,3 +612,69 @@ fn a_fast_demonstration_is_time_scaled_not_clipped() {
     }
     assert!(dist(q_f.last().unwrap(), q_n.last().unwrap()) < 1e-4);
 }
+
+/// The platform navigates (issue 21): every drive of the 18 planned programs on the
+/// navigating ideal cell keeps the world's acceptable clearance r (less half the check step)
+/// for the platform, the arm and the held part, checked on every 1 ms sample against the true
+/// boxes; the straight-line drives of the plain ideal cell do not.
+#[test]
+fn every_drive_of_the_planned_programs_is_clear() {
+    use prf_sim::navigation::{
+        CHECK_STEP, PartTracker, drive_phases, execute_navigating, part_size,
+    };
+    let world = World::example();
+    let rt = Runtime::load(full_blob()).expect("load");
+    let cell = Cell::new(&world, &rt.model);
+    let r = world.clearance.acceptable;
+    let mut straight_min = f64::INFINITY;
+    for ft in world_tasks(&world) {
+        let p = plan(&rt, &ft.task()).expect("plan");
+        let program = p.program.as_ref().expect("program");
+        let (run, drives) = execute_navigating(&world, &rt, program, &ft, 600_000).expect("drives");
+        assert!(run.fault.is_none(), "{}: {:?}", ft.label(), run.fault);
+        assert!(run.setpoints.last().is_some_and(|s| s.is_final()));
+        let part = || PartTracker::new(part_size(&world, &ft.part.1), ft.part_pose);
+        let phases = drive_phases(&cell, &run.samples, part());
+        assert_eq!(
+            phases.len(),
+            drives.len(),
+            "{}: {phases:?} {drives:?}",
+            ft.label()
+        );
+        let mut line = format!("{}:", ft.label());
+        for (d, ph) in drives.iter().zip(&phases) {
+            line += &format!(
+                " {} corners, clearance {:.1} mm{};",
+                d.path.len(),
+                ph.min.robot * 1e3,
+                if ph.holding {
+                    format!(", part {:.1} mm", ph.min.part * 1e3)
+                } else {
+                    String::new()
+                }
+            );
+            assert!(
+                ph.min.min() >= r - CHECK_STEP / 2.0,
+                "{}: drive at t = {:.3}–{:.3} s keeps {:?}",
+                ft.label(),
+                ph.t.0,
+                ph.t.1,
+                ph.min
+            );
+        }
+        println!("{line}");
+        // The same program on the straight-line ideal cell, for comparison.
+        let plain = execute(&rt, program, &ft.home, ExecutorConfig::default(), 600_000);
+        for ph in drive_phases(&cell, &plain.samples, part()) {
+            straight_min = straight_min.min(ph.min.min());
+        }
+    }
+    println!(
+        "straight-line drives: smallest clearance {:.1} mm",
+        straight_min * 1e3
+    );
+    assert!(
+        straight_min < 0.0,
+        "the straight-line drives should collide somewhere"
+    );
+}

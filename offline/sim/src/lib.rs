@@ -8,6 +8,7 @@
 //! - [`tasks`]: the tasks of a floor plan as the runtime takes them.
 
 pub mod demogen;
+pub mod navigation;
 pub mod tasks;
 pub mod validate;
 pub mod world;

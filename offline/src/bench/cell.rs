@@ -238,7 +238,7 @@ pub fn run(a: &Args) -> Result<()> {
     // (2) The 1 kHz loop against firmware-sim.
     let cell_name = format!("bench-{}", std::process::id());
     let log = std::env::temp_dir().join(format!("prf-firmware-sim-{cell_name}.log"));
-    let _fw = ChildGuard(spawn_firmware(&cell_name, planar(&ft.home), &log)?);
+    let _fw = ChildGuard(spawn_firmware(&cell_name, planar(&ft.home), &log, None)?);
     let cfg = CellConfig {
         alloc_probe: Some(crate::bench::alloc_count::thread_allocations),
         ..CellConfig::new(&cell_name)

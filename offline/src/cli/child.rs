@@ -5,8 +5,15 @@ use anyhow::Context;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 
-/// Starts `prf firmware-sim` for cell `cell` with the platform at `base`, logging to `log`.
-pub fn spawn_firmware(cell: &str, base: [f64; 3], log: &Path) -> anyhow::Result<Child> {
+/// Starts `prf firmware-sim` for cell `cell` with the platform at `base`, logging to `log`;
+/// the platform navigates on the floor map of `world` (a world file, or None for the built-in
+/// example cell).
+pub fn spawn_firmware(
+    cell: &str,
+    base: [f64; 3],
+    log: &Path,
+    world: Option<&Path>,
+) -> anyhow::Result<Child> {
     let exe = std::env::current_exe().context("locating the prf executable")?;
     Command::new(exe)
         .args([
@@ -18,6 +25,8 @@ pub fn spawn_firmware(cell: &str, base: [f64; 3], log: &Path) -> anyhow::Result<
         ])
         .arg(log)
         .arg(format!("--base={},{},{}", base[0], base[1], base[2]))
+        .arg("--world")
+        .arg(world.unwrap_or(Path::new("example")))
         .stdout(Stdio::null())
         .spawn()
         .context("starting prf firmware-sim")

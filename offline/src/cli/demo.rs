@@ -67,6 +67,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         &cell_name,
         planar(&world.home.pose()),
         &log,
+        None,
     )?);
     let cfg = CellConfig {
         alloc_probe: Some(crate::bench::alloc_count::thread_allocations),
@@ -164,7 +165,7 @@ fn execute_all(
     only: &[usize],
 ) -> anyhow::Result<(usize, usize)> {
     println!(
-        "\n{:>2}  {:<22} {:<8} {:>7}  {:<10} {:>5} {:>8} {:>9} {:>4} {:>6} {:>13}",
+        "\n{:>2}  {:<22} {:<8} {:>7}  {:<10} {:>5} {:>8} {:>9} {:>8} {:>4} {:>6} {:>13}",
         "#",
         "task",
         "feasible",
@@ -173,6 +174,7 @@ fn execute_all(
         "grasp",
         "time s",
         "track mrad",
+        "drive mm",
         "lost",
         "misses",
         "lat p50/p99 µs"
@@ -213,9 +215,11 @@ fn execute_all(
         // Tasks start where the previous one ended: at home.
         let r = cell.execute(rt, program, &ft.home)?;
         let tail = format!(
-            "{:>8.1} {:>9.2} {:>4} {:>6} {:>6.1}/{:<6.1}",
+            "{:>8.1} {:>9.2} {:>8} {:>4} {:>6} {:>6.1}/{:<6.1}",
             r.duration_s,
             r.max_tracking_error * 1e3,
+            r.min_drive_clearance
+                .map_or("-".to_string(), |c| format!("{:.1}", c * 1e3)),
             r.lost,
             r.deadline_misses,
             r.latency_us[0],

@@ -4,15 +4,17 @@
 use crate::cli::args::{TaskArgs, WorldArgs, read_blob, runtime};
 use anyhow::{Context, bail};
 use prf_files::dataset::trajectory_csv;
-use prf_host::ideal::execute;
-use prf_runtime::executor::{ExecutorConfig, planar};
+use prf_runtime::executor::planar;
 use prf_runtime::plan::{Plan, PlanError, plan};
+use prf_runtime::program::Program;
 use prf_runtime::skill_plan::MAX_TIME_SCALE;
 use prf_runtime::{Runtime, RuntimeConfig};
 use prf_shared::motion::Param;
+use prf_sim::navigation::{PartTracker, drive_phases, execute_navigating, part_size};
 use prf_sim::tasks::{FloorTask, world_tasks};
 use prf_sim::world::World;
-use std::path::PathBuf;
+use prf_sim::world::geometry::Cell;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
@@ -25,7 +27,8 @@ pub struct Args {
     /// Plan every task of the floor plan (18 in the example cell) and print a table.
     #[arg(long, conflicts_with_all = ["part", "from", "to", "export"])]
     pub all: bool,
-    /// Write the program at 1 kHz, executed on an ideal cell, as a dataset trajectory CSV.
+    /// Write the program at 1 kHz, executed on an ideal cell (the arm exact, the platform
+    /// navigating on the world's floor map), as a dataset trajectory CSV.
     #[arg(long)]
     pub export: Option<PathBuf>,
     /// Write the task as a task block (for the cell-controller firmware: flash it at the TASK
@@ -112,25 +115,53 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let Some(program) = &p.program else {
             bail!("no program to export: no skill integrates for this task");
         };
-        let run = execute(
-            &rt,
-            program,
-            &ft.home,
-            ExecutorConfig::default(),
-            10_000_000,
-        );
-        if let Some(f) = run.fault {
-            bail!("the program faulted on the ideal cell: {f}");
-        }
-        std::fs::write(path, trajectory_csv(&run.samples))
-            .with_context(|| format!("writing {}", path.display()))?;
+        export(&world, &rt, &ft, program, path)?;
+    }
+    Ok(())
+}
+
+/// Runs `program` on the ideal cell whose platform navigates on `world`'s floor map, prints
+/// each drive's corners and clearances, and writes the trajectory CSV.
+fn export(
+    world: &World,
+    rt: &Runtime<'_>,
+    ft: &FloorTask,
+    program: &Program,
+    path: &Path,
+) -> anyhow::Result<()> {
+    let (run, drives) = execute_navigating(world, rt, program, ft, 10_000_000)
+        .with_context(|| format!("task {}", ft.label()))?;
+    if let Some(f) = run.fault {
+        bail!("the program faulted on the ideal cell: {f}");
+    }
+    let cell = Cell::new(world, &rt.model);
+    let part = PartTracker::new(part_size(world, &ft.part.1), ft.part_pose);
+    for (d, ph) in drives.iter().zip(drive_phases(&cell, &run.samples, part)) {
         println!(
-            "program: {:.2} s at 1 kHz on an ideal cell ({} samples) written to {}",
-            run.samples.len() as f64 * 1e-3,
-            run.samples.len(),
-            path.display()
+            "  drive {:.1}–{:.1} s to ({:.3} m, {:.3} m, {:.1}°): {} corners, clearance {:.1} mm{}",
+            ph.t.0,
+            ph.t.1,
+            d.goal[0],
+            d.goal[1],
+            d.goal[2].to_degrees(),
+            d.path.len(),
+            ph.min.robot * 1e3,
+            if ph.holding {
+                format!(", held part {:.1} mm", ph.min.part * 1e3)
+            } else {
+                String::new()
+            }
         );
     }
+    std::fs::write(path, trajectory_csv(&run.samples))
+        .with_context(|| format!("writing {}", path.display()))?;
+    println!(
+        "program: {:.2} s at 1 kHz on an ideal cell (arm exact, platform navigating on the floor map keeping {:.0} mm) ({} samples) written to {}",
+        run.samples.len() as f64 * 1e-3,
+        world.clearance.acceptable * 1e3,
+        run.samples.len(),
+        path.display()
+    );
     Ok(())
 }
 

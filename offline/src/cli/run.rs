@@ -53,7 +53,12 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     };
     let _child = if a.spawn_firmware {
         let log = std::env::temp_dir().join(format!("prf-firmware-sim-{}.log", a.cell));
-        Some(ChildGuard(spawn_firmware(&a.cell, planar(&ft.home), &log)?))
+        Some(ChildGuard(spawn_firmware(
+            &a.cell,
+            planar(&ft.home),
+            &log,
+            a.world.world.as_deref(),
+        )?))
     } else {
         None
     };

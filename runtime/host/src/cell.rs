@@ -106,6 +106,9 @@ pub struct CellReport {
     /// planned program: it is emitted as certified), and the largest change, rad.
     pub shaped: u64,
     pub max_shaping: f64,
+    /// Smallest clearance the controller measured while the platform drove on its floor map,
+    /// m (None: no drive on a map).
+    pub min_drive_clearance: Option<f64>,
     /// Allocations on the loop's thread from its first tick to its last (with
     /// [`CellConfig::alloc_probe`]).
     pub loop_allocations: Option<u64>,
@@ -129,6 +132,9 @@ impl CellReport {
     /// One line: "11.2 s, emitted at 0.961 of the limits …, max tracking error 1.30 mrad, lost
     /// 0, …, setpoint latency p50 …".
     pub fn summary(&self) -> String {
+        let drives = self.min_drive_clearance.map_or(String::new(), |c| {
+            format!(", drives kept ≥ {:.1} mm from every obstacle", c * 1e3)
+        });
         let allocations = self.loop_allocations.map_or(String::new(), |n| {
             format!(
                 ", {n} allocations in the loop ({:.2} per tick)",
@@ -136,7 +142,7 @@ impl CellReport {
             )
         });
         format!(
-            "{:.1} s, emitted at {:.3} of the limits (acceleration {:.3}, jerk {:.3}), {} ticks shaped (max {:.2} mrad), max tracking error {:.2} mrad, lost {}, repeated {}, refused {}, deadline misses {}, wake-up late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, setpoint latency p50 {:.1} µs p99 {:.1} µs max {:.0} µs{}",
+            "{:.1} s, emitted at {:.3} of the limits (acceleration {:.3}, jerk {:.3}), {} ticks shaped (max {:.2} mrad), max tracking error {:.2} mrad, lost {}, repeated {}, refused {}, deadline misses {}, wake-up late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, setpoint latency p50 {:.1} µs p99 {:.1} µs max {:.0} µs{}{}",
             self.duration_s,
             self.emitted.max(),
             self.emitted.acceleration,
@@ -154,6 +160,7 @@ impl CellReport {
             self.latency_us[0],
             self.latency_us[1],
             self.latency_us[3],
+            drives,
             allocations
         )
     }
@@ -375,6 +382,10 @@ impl Cell {
                 seen_sp = js.setpoint_seq;
                 timing.latency(js.setpoint_latency_ns as f64 * 1e-3);
                 report.max_tracking_error = report.max_tracking_error.max(js.tracking_error);
+                if js.drive_clearance.is_finite() {
+                    let m = report.min_drive_clearance.get_or_insert(js.drive_clearance);
+                    *m = m.min(js.drive_clearance);
+                }
                 (report.lost, report.repeated, report.rejected) =
                     (js.lost, js.repeated, js.rejected);
             }
@@ -456,6 +467,13 @@ impl Cell {
                 } else {
                     "setpoint refused"
                 }
+            ))
+        } else if js.status & status::NO_PATH != 0 {
+            Some(format!(
+                "firmware-sim: the platform has no collision-free path to its goal; it holds at ({:.3} m, {:.3} m, {:.1}°) (the controller's log says why)",
+                js.base[0],
+                js.base[1],
+                js.base[2].to_degrees()
             ))
         } else {
             None

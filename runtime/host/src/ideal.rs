@@ -4,7 +4,7 @@
 
 use embassy_time::Instant;
 use prf_runtime::Runtime;
-use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Setpoint};
+use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Plant, Setpoint};
 pub use prf_runtime::ideal::IdealCell;
 use prf_runtime::program::Program;
 use prf_runtime::reverse::Reversal;
@@ -20,7 +20,8 @@ pub struct Execution {
     pub fault: Option<Fault>,
 }
 
-/// Runs `program` from the platform at `home` until it is done, faults, or `max_ticks`.
+/// Runs `program` from the platform at `home` on the ideal cell until it is done, faults, or
+/// `max_ticks`.
 pub fn execute(
     rt: &Runtime<'_>,
     program: &Program,
@@ -28,30 +29,45 @@ pub fn execute(
     cfg: ExecutorConfig,
     max_ticks: usize,
 ) -> Execution {
+    let mut cell = IdealCell::new(rt.model.home, home, rt.config.rdmp.dt);
+    let Ok(run) = execute_on(rt, program, home, cfg, max_ticks, &mut cell);
+    run
+}
+
+/// [`execute`] against any plant (one tick per 1 ms of simulated time); stops at the plant's
+/// first error.
+pub fn execute_on<P: Plant>(
+    rt: &Runtime<'_>,
+    program: &Program,
+    home: &Pose,
+    cfg: ExecutorConfig,
+    max_ticks: usize,
+    plant: &mut P,
+) -> Result<Execution, P::Error> {
     let mut reversal = Box::new(Reversal::new());
     let mut ex = Executor::new(rt, program.clone(), home, cfg, &mut reversal);
     let dt = rt.config.rdmp.dt;
-    let mut cell = IdealCell::new(rt.model.home, home, dt);
     let tick = embassy_time::Duration::from_micros((dt * 1e6).round() as u64);
     let mut now = Instant::from_ticks(0);
     let (mut samples, mut setpoints) = (Vec::new(), Vec::new());
     for k in 0..max_ticks {
-        let Ok(sp) = ex.step(now, &mut cell);
+        let sp = ex.step(now, plant)?;
         setpoints.push(sp);
+        let m = plant.measured();
         samples.push(Sample {
             t: k as f64 * dt,
-            base: cell.measured.base,
-            arm: cell.measured.arm,
-            gripper: cell.measured.gripper,
+            base: m.base,
+            arm: m.arm,
+            gripper: m.gripper,
         });
         if sp.is_final() {
             break;
         }
         now += tick;
     }
-    Execution {
+    Ok(Execution {
         samples,
         setpoints,
         fault: ex.fault(),
-    }
+    })
 }

@@ -48,6 +48,12 @@ impl Online {
         self.input.current_acceleration.copy_from_slice(a);
     }
 
+    /// Rest-to-rest moves follow the straight line between start and target in every axis
+    /// (Ruckig's phase synchronisation).
+    pub fn set_phase_synchronised(&mut self) {
+        self.input.synchronization = ruckig::Synchronization::Phase;
+    }
+
     /// Drive to `target` (position interface), arriving at rest.
     pub fn go_to(&mut self, target: &[f64]) {
         self.input.control_interface = ControlInterface::Position;

@@ -34,6 +34,8 @@ pub mod status {
     pub const BRAKING: u32 = 1 << 2;
     /// A setpoint session is active (between FIRST and LAST).
     pub const ACTIVE: u32 = 1 << 3;
+    /// The platform found no collision-free path to its goal and holds where it is.
+    pub const NO_PATH: u32 = 1 << 4;
 }
 
 /// Executor modes as sent in [`SetpointMsg::mode`]: `prf_runtime::executor::Mode` as u32.
@@ -69,7 +71,7 @@ pub struct SetpointMsg {
 /// The measured state from the joint controller, once per controller cycle.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
-#[type_name("prf::JointStateMsg/1")]
+#[type_name("prf::JointStateMsg/2")]
 pub struct JointStateMsg {
     /// 1, 2, 3, … over the controller's life.
     pub seq: u64,
@@ -88,6 +90,9 @@ pub struct JointStateMsg {
     pub gripper: f64,
     /// Largest |reference − measured| of any joint in this cycle, rad.
     pub tracking_error: f64,
+    /// While the platform drives on a known floor map: the robot's clearance to the nearest
+    /// obstacle (platform, arm, gripper and a held part), m; NaN otherwise.
+    pub drive_clearance: f64,
     /// See [`status`].
     pub status: u32,
     /// Setpoints lost (sequence gaps), repeated (sequence not increasing) and refused in this
@@ -105,7 +110,7 @@ mod tests {
     #[test]
     fn message_layout_is_fixed() {
         assert_eq!(core::mem::size_of::<SetpointMsg>(), 160);
-        assert_eq!(core::mem::size_of::<JointStateMsg>(), 200);
+        assert_eq!(core::mem::size_of::<JointStateMsg>(), 208);
         assert_eq!(core::mem::align_of::<SetpointMsg>(), 8);
         assert_eq!(core::mem::align_of::<JointStateMsg>(), 8);
     }

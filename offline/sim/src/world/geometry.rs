@@ -400,3 +400,139 @@ fn platform_z(model: &RobotModel) -> (f64, f64) {
     let p = &model.platform;
     (p.centre.z - p.half_extents.z, p.centre.z + p.half_extents.z)
 }
+
+/// A part held in the gripper, as spheres in the TCP frame that together contain its box
+/// (each cell of a grid of at most 40 mm over the box, by its circumscribed sphere: at most
+/// 15 mm conservative at a face).
+#[derive(Clone, Debug)]
+pub struct HeldPart {
+    /// (centre in the TCP frame, radius).
+    pub spheres: Vec<(Vector3<f64>, f64)>,
+}
+
+impl HeldPart {
+    /// The part of type `part_type` (box `size`, frame at the centre of its base) held with
+    /// `grasp` (the TCP pose in the part frame).
+    pub fn new(size: [f64; 3], grasp: &Pose) -> Self {
+        let cells = size.map(|s| (s / 0.04).ceil().max(1.0) as usize);
+        let cell = Vector3::new(
+            size[0] / cells[0] as f64,
+            size[1] / cells[1] as f64,
+            size[2] / cells[2] as f64,
+        );
+        let radius = cell.norm() / 2.0;
+        let to_tcp = grasp.inverse();
+        let mut spheres = Vec::new();
+        for i in 0..cells[0] {
+            for j in 0..cells[1] {
+                for k in 0..cells[2] {
+                    let c = Vector3::new(
+                        -size[0] / 2.0 + (i as f64 + 0.5) * cell.x,
+                        -size[1] / 2.0 + (j as f64 + 0.5) * cell.y,
+                        (k as f64 + 0.5) * cell.z,
+                    );
+                    spheres.push((to_tcp.transform_point(&c.into()).coords, radius));
+                }
+            }
+        }
+        HeldPart { spheres }
+    }
+}
+
+/// The robot as it drives: the arm still at one configuration, so every sphere (arm, gripper,
+/// held part) is fixed in the platform frame q_m.
+#[derive(Clone, Debug)]
+pub struct DriveBody {
+    /// (centre in the q_m frame, radius, belongs to the held part).
+    spheres: Vec<(Vector3<f64>, f64, bool)>,
+    /// Largest horizontal distance of any point of the body from the q_m origin, m.
+    pub radius: f64,
+}
+
+/// Clearances of the driving robot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DriveClearance {
+    /// Platform, arm and gripper to the boxes and the floor, m.
+    pub robot: f64,
+    /// The held part to the boxes (∞ without one), m.
+    pub part: f64,
+}
+
+impl DriveClearance {
+    /// The smaller of the two.
+    pub fn min(&self) -> f64 {
+        self.robot.min(self.part)
+    }
+}
+
+impl Cell {
+    /// The robot with the arm at `q_a`, holding `parts` (none, the one held, or every part it
+    /// might hold), in the platform frame.
+    pub fn drive_body(&self, q_a: &[f64; NA], parts: &[&HeldPart]) -> DriveBody {
+        let model = &self.model;
+        let kin = ArmKinematics::new(model, &JointVector::from(*q_a));
+        let mut local = [Vector3::zeros(); prf_shared::robot::MAX_SPHERES];
+        kin.sphere_centres(model, &mut local);
+        let mount = arm_base_pose(model, [0.0; 3]);
+        let mut spheres: Vec<_> = (0..model.spheres.len())
+            .map(|k| {
+                let c = mount.transform_point(&local[k].into()).coords;
+                (c, model.spheres[k].radius, false)
+            })
+            .collect();
+        let tcp = mount * kin.tcp;
+        for p in parts {
+            for (c, r) in &p.spheres {
+                spheres.push((tcp.transform_point(&(*c).into()).coords, *r, true));
+            }
+        }
+        let p = &model.platform;
+        let platform = (p.centre.xy().abs() + p.half_extents.xy()).norm();
+        let radius = spheres
+            .iter()
+            .map(|(c, r, _)| c.xy().norm() + r)
+            .fold(platform, f64::max);
+        DriveBody { spheres, radius }
+    }
+
+    /// Clearance of the driving robot `body` with the platform at q_m: its spheres against
+    /// the boxes (and the floor), the platform prism against the boxes.
+    pub fn drive_clearance(&self, body: &DriveBody, q_m: [f64; 3]) -> DriveClearance {
+        let (s, c) = q_m[2].sin_cos();
+        let origin = Vector2::new(q_m[0], q_m[1]);
+        let mut out = DriveClearance {
+            robot: f64::INFINITY,
+            part: f64::INFINITY,
+        };
+        let platform = self.platform_footprint(q_m);
+        let (pz0, pz1) = platform_z(&self.model);
+        for o in &self.obstacles {
+            // Cull boxes out of reach of the body by more than the current minimum.
+            let gap = (o.centre.xy() - origin).norm() - o.half.xy().norm() - body.radius;
+            if gap > out.min() {
+                continue;
+            }
+            for (p, r, held) in &body.spheres {
+                let w = Vector3::new(q_m[0] + c * p.x - s * p.y, q_m[1] + s * p.x + c * p.y, p.z);
+                let d = o.signed_distance(&w) - r;
+                let slot = if *held { &mut out.part } else { &mut out.robot };
+                *slot = slot.min(d);
+            }
+            let (oz0, oz1) = o.z_range();
+            let dz = (oz0 - pz1).max(pz0 - oz1).max(0.0);
+            let dxy = polygon_distance(&platform, &o.footprint());
+            let d = if dz == 0.0 && dxy == 0.0 {
+                -f64::MIN_POSITIVE
+            } else {
+                dxy.hypot(dz)
+            };
+            out.robot = out.robot.min(d);
+        }
+        for (p, r, held) in &body.spheres {
+            let floor = p.z - r;
+            let slot = if *held { &mut out.part } else { &mut out.robot };
+            *slot = slot.min(floor);
+        }
+        out
+    }
+}
