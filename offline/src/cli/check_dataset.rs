@@ -5,9 +5,11 @@ use crate::cli::progress::Bar;
 use anyhow::bail;
 use prf_files::dataset::Dataset;
 use prf_shared::robot::RobotModel;
+use prf_shared::se3::{Pose, pose_from_array};
+use prf_sim::navigation::{PartTracker, drive_phases, part_size};
 use prf_sim::validate::{self, MotionLimits};
 use prf_sim::world::World;
-use prf_sim::world::geometry::Cell;
+use prf_sim::world::geometry::{Cell, DriveClearance};
 use rayon::prelude::*;
 use std::path::PathBuf;
 
@@ -72,10 +74,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .par_iter()
         .map(|d| {
             let r = validate::check(&cell, &limits, &d.samples, args.resolution);
+            let drives = drive_minimum(&world, &cell, d);
             bar.inc();
-            r
+            (r, drives)
         })
         .collect();
+    let (reports, drives): (Vec<_>, Vec<_>) = reports.into_iter().unzip();
     bar.finish();
     let c = world.clearance;
     // The r_d the programs are checked against: the one the dataset states (what learning
@@ -88,22 +92,31 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         ),
     };
     println!(
-        "{:<6} {:>7} {:>12} {:>10} {:>8} {:>8}  closest obstacle",
-        "demo", "T [s]", "clear. [mm]", "self [mm]", "v/vmax", "a/amax"
+        "{:<6} {:>7} {:>12} {:>10} {:>8} {:>8} {:>11} {:>10}  closest obstacle",
+        "demo", "T [s]", "clear. [mm]", "self [mm]", "v/vmax", "a/amax", "drive [mm]", "part [mm]"
     );
     let mut failed = 0;
-    for (d, r) in dataset.demonstrations.iter().zip(&reports) {
+    for ((d, r), drive) in dataset.demonstrations.iter().zip(&reports).zip(&drives) {
         let ok = r.ok(r_d, c.self_collision, validate::LIMIT_TOLERANCE);
         failed += usize::from(!ok);
         let contact = format!("{:?}", r.world_contact);
+        let mm = |x: f64| {
+            if x.is_finite() {
+                format!("{:.1}", x * 1e3)
+            } else {
+                "-".into()
+            }
+        };
         println!(
-            "{:<6} {:>7.1} {:>12.1} {:>10.1} {:>8.3} {:>8.3}  {}{}",
+            "{:<6} {:>7.1} {:>12.1} {:>10.1} {:>8.3} {:>8.3} {:>11} {:>10}  {}{}",
             d.id,
             d.samples.last().map_or(0.0, |s| s.t),
             r.min_world * 1e3,
             r.min_self * 1e3,
             r.max_speed_ratio,
             r.max_acceleration_ratio,
+            mm(drive.robot),
+            mm(drive.part),
             contact,
             if ok { "" } else { "  <-- FAILS" }
         );
@@ -151,4 +164,28 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     println!("all programs keep r_d, self clearance, joint, speed and acceleration limits");
     Ok(())
+}
+
+/// The smallest clearances of a program's drives (platform, arm and gripper; the held part
+/// separately, tracked from the gripper from its recorded start pose), every sample against
+/// the true boxes.
+fn drive_minimum(
+    world: &World,
+    cell: &Cell,
+    d: &prf_files::dataset::Demonstration,
+) -> DriveClearance {
+    let part = PartTracker::new(
+        part_size(world, &d.task.part.kind),
+        pose_from_array(d.task.part.pose).unwrap_or_else(Pose::identity),
+    );
+    drive_phases(cell, &d.samples, part).iter().fold(
+        DriveClearance {
+            robot: f64::INFINITY,
+            part: f64::INFINITY,
+        },
+        |m, p| DriveClearance {
+            robot: m.robot.min(p.min.robot),
+            part: m.part.min(p.min.part),
+        },
+    )
 }
