@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{blob, dir};
+use common::{blob, dir, stream_ratios};
 use prf_ipc::clock::now_ns;
 use prf_ipc::link::{self, Observer};
 use prf_ipc::messages::{JointStateMsg, SetpointMsg, flags, mode, status};
@@ -250,10 +250,10 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
         }
     }
     let q: Vec<[f64; NA]> = sp.iter().map(|s| s.q).collect();
-    let r = stream_ratios(&q, &limits);
+    let r = stream_ratios(&q, &model);
     println!(
-        "received stream: speed {:.3}, acceleration {:.3}, jerk {:.3} of the limits",
-        r[0], r[1], r[2]
+        "received stream: position {:.3}, speed {:.3}, acceleration {:.3}, jerk {:.3} of the limits",
+        r[0], r[1], r[2], r[3]
     );
     assert!(r.iter().all(|x| *x <= 1.0 + 1e-9), "{r:?}");
     assert_eq!(r_u64(&r_json, "shaped"), 0, "{r_json}");
@@ -299,27 +299,6 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
 
 fn r_u64(r: &serde_json::Value, key: &str) -> u64 {
     r[key].as_u64().unwrap_or_else(|| panic!("no {key} in {r}"))
-}
-
-/// Peak (speed, acceleration, jerk) ratios of an arm stream at 1 ms that stands still before
-/// and after it: third differences of the padded stream.
-fn stream_ratios(q: &[[f64; NA]], l: &MotionLimits) -> [f64; 3] {
-    let dt = 1e-3;
-    let mut p = vec![q[0]; 3];
-    p.extend_from_slice(q);
-    p.extend([*q.last().unwrap(); 3]);
-    let mut r = [0.0f64; 3];
-    for k in 3..p.len() {
-        for j in 0..NA {
-            let d1 = p[k][j] - p[k - 1][j];
-            let d2 = p[k][j] - 2.0 * p[k - 1][j] + p[k - 2][j];
-            let d3 = p[k][j] - 3.0 * p[k - 1][j] + 3.0 * p[k - 2][j] - p[k - 3][j];
-            r[0] = r[0].max(d1.abs() / dt / l.arm_speed[j]);
-            r[1] = r[1].max(d2.abs() / (dt * dt) / l.arm_acceleration[j]);
-            r[2] = r[2].max(d3.abs() / (dt * dt * dt) / l.arm_jerk[j]);
-        }
-    }
-    r
 }
 
 /// The arm setpoints of a stream that differ from their predecessor (the moving ones: waits

@@ -2,6 +2,10 @@
 //! soundness against the ground-truth cell, SkillPlan-PTT against a brute-force grid, the
 //! executor against the planner, and bad input.
 
+#[path = "../../tests/common/mod.rs"]
+mod common;
+
+use common::stream_ratios;
 use prf_host::ideal::{Execution, execute};
 use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode};
 use prf_runtime::plan::{PlanError, plan};
@@ -14,7 +18,6 @@ use prf_runtime::task::{Missing, TaskError};
 use prf_runtime::{LoadError, Runtime};
 use prf_shared::JointVector;
 use prf_shared::kinematics::ArmKinematics;
-use prf_shared::limits::MotionLimits;
 use prf_shared::rdmp::RdmpRun;
 use prf_shared::risk::RiskAccumulator;
 use prf_shared::robot::RobotModel;
@@ -470,31 +473,6 @@ fn bad_input_gives_typed_errors_or_a_fault() {
     assert_eq!(ex.fault(), Some(Fault::Timeout { segment: 0 }));
     let sp = ex.tick(t(0), &at_home);
     assert_eq!(sp.mode, Mode::Fault);
-}
-
-/// Peak (position, speed, acceleration, jerk) ratios of an arm stream sampled at 1 ms that
-/// stands still before its first and after its last sample: plain third differences of the
-/// padded stream (independent of `prf_shared::limits::ArmMeter`).
-fn stream_ratios(stream: &[[f64; 7]], model: &prf_shared::robot::RobotModel) -> [f64; 4] {
-    let l = MotionLimits::kmr_iiwa(model);
-    let dt = 1e-3;
-    let mut p = vec![stream[0]; 3];
-    p.extend_from_slice(stream);
-    p.extend([*stream.last().unwrap(); 3]);
-    let mut r = [0.0f64; 4];
-    for k in 3..p.len() {
-        for j in 0..7 {
-            let (lo, hi) = (model.joints[j].lower, model.joints[j].upper);
-            let d1 = p[k][j] - p[k - 1][j];
-            let d2 = p[k][j] - 2.0 * p[k - 1][j] + p[k - 2][j];
-            let d3 = p[k][j] - 3.0 * p[k - 1][j] + 3.0 * p[k - 2][j] - p[k - 3][j];
-            r[0] = r[0].max((2.0 * p[k][j] - lo - hi).abs() / (hi - lo));
-            r[1] = r[1].max(d1.abs() / dt / l.arm_speed[j]);
-            r[2] = r[2].max(d2.abs() / (dt * dt) / l.arm_acceleration[j]);
-            r[3] = r[3].max(d3.abs() / (dt * dt * dt) / l.arm_jerk[j]);
-        }
-    }
-    r
 }
 
 /// Certified = emitted: each of the example cell's 18 planned programs, executed on the ideal

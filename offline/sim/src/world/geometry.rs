@@ -239,17 +239,8 @@ impl Cell {
         let kin = ArmKinematics::new(&self.model, &JointVector::from(*q_a));
         let mut r = self.arm_clearance(&base, &kin, &self.obstacles_near(q_m));
         let platform = self.platform_footprint(q_m);
-        let (pz0, pz1) = platform_z(&self.model);
         for o in &self.obstacles {
-            let (oz0, oz1) = o.z_range();
-            let dz = (oz0 - pz1).max(pz0 - oz1).max(0.0);
-            let dxy = polygon_distance(&platform, &o.footprint());
-            let d = if dz == 0.0 && dxy == 0.0 {
-                // Overlapping prisms: a penetration (its depth is not computed).
-                -f64::MIN_POSITIVE
-            } else {
-                dxy.hypot(dz)
-            };
+            let d = self.platform_distance(&platform, o);
             if d < r.world {
                 r.world = d;
                 r.world_contact = Contact::Platform {
@@ -258,6 +249,21 @@ impl Cell {
             }
         }
         r
+    }
+
+    /// Distance between the platform prism (footprint `platform`) and box `o`: the footprints'
+    /// distance combined with the gap of the z intervals; overlapping prisms give a tiny
+    /// negative number (a penetration whose depth is not computed).
+    fn platform_distance(&self, platform: &[Vector2<f64>; 4], o: &Obstacle) -> f64 {
+        let (pz0, pz1) = platform_z(&self.model);
+        let (oz0, oz1) = o.z_range();
+        let dz = (oz0 - pz1).max(pz0 - oz1).max(0.0);
+        let dxy = polygon_distance(platform, &o.footprint());
+        if dz == 0.0 && dxy == 0.0 {
+            -f64::MIN_POSITIVE
+        } else {
+            dxy.hypot(dz)
+        }
     }
 
     /// Obstacles that can be within reach of the arm when the platform stands at q_m.
@@ -505,7 +511,6 @@ impl Cell {
             part: f64::INFINITY,
         };
         let platform = self.platform_footprint(q_m);
-        let (pz0, pz1) = platform_z(&self.model);
         for o in &self.obstacles {
             // Cull boxes out of reach of the body by more than the current minimum.
             let gap = (o.centre.xy() - origin).norm() - o.half.xy().norm() - body.radius;
@@ -518,15 +523,7 @@ impl Cell {
                 let slot = if *held { &mut out.part } else { &mut out.robot };
                 *slot = slot.min(d);
             }
-            let (oz0, oz1) = o.z_range();
-            let dz = (oz0 - pz1).max(pz0 - oz1).max(0.0);
-            let dxy = polygon_distance(&platform, &o.footprint());
-            let d = if dz == 0.0 && dxy == 0.0 {
-                -f64::MIN_POSITIVE
-            } else {
-                dxy.hypot(dz)
-            };
-            out.robot = out.robot.min(d);
+            out.robot = out.robot.min(self.platform_distance(&platform, o));
         }
         for (p, r, held) in &body.spheres {
             let floor = p.z - r;
