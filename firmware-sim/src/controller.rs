@@ -194,7 +194,7 @@ impl Plant {
 
     /// The robot's clearance while the platform drives on a map (NaN otherwise).
     fn drive_clearance(&self) -> f64 {
-        self.platform.clearance(&self.servo.q, self.holding())
+        self.platform.clearance()
     }
 }
 

@@ -35,6 +35,8 @@ impl Map {
 /// A platform that navigates on a floor map.
 pub struct Navigating {
     map: Arc<Map>,
+    /// The robot as it drives now (set with each goal: the arm holds while the platform drives).
+    body: prf_sim::world::geometry::DriveBody,
     drive: Drive,
     planning: Option<JoinHandle<Result<Vec<[f64; 3]>, NavError>>>,
     no_path: Option<NavError>,
@@ -61,12 +63,14 @@ impl Platform {
             )),
             Some(w) => {
                 let model = prf_shared::robot::RobotModel::kmr_iiwa14();
+                let map = Arc::new(Map {
+                    cell: Cell::new(w, &model),
+                    loads: any_held_part(w),
+                    clearance: w.clearance.acceptable,
+                });
                 Platform::Navigating(Navigating {
-                    map: Arc::new(Map {
-                        cell: Cell::new(w, &model),
-                        loads: any_held_part(w),
-                        clearance: w.clearance.acceptable,
-                    }),
+                    body: map.body(&model.home, false),
+                    map,
                     drive: Drive::new(pose, limits),
                     planning: None,
                     no_path: None,
@@ -85,10 +89,10 @@ impl Platform {
             Platform::Navigating(n) => {
                 n.drive.brake();
                 n.no_path = None;
-                let (map, start, arm) = (n.map.clone(), n.drive.pose(), *arm);
+                n.body = n.map.body(arm, holding);
+                let (map, start, body) = (n.map.clone(), n.drive.pose(), n.body.clone());
                 n.planning = Some(std::thread::spawn(move || {
-                    let nav = Navigator::new(&map.cell, map.body(&arm, holding), map.clearance);
-                    nav.plan(start, goal)
+                    Navigator::new(&map.cell, body, map.clearance).plan(start, goal)
                 }));
             }
         }
@@ -136,15 +140,13 @@ impl Platform {
         [p[0], p[1], wrap(p[2])]
     }
 
-    /// While navigating and moving: the robot's clearance to the nearest box, m (NaN
-    /// otherwise).
-    pub fn clearance(&self, arm: &[f64; NA], holding: bool) -> f64 {
+    /// While navigating and moving: the clearance of the robot as it set off for its goal to
+    /// the nearest box, m (NaN otherwise).
+    pub fn clearance(&self) -> f64 {
         match self {
-            Platform::Navigating(n) if !n.drive.arrived() => n
-                .map
-                .cell
-                .drive_clearance(&n.map.body(arm, holding), n.drive.pose())
-                .min(),
+            Platform::Navigating(n) if !n.drive.arrived() => {
+                n.map.cell.drive_clearance(&n.body, n.drive.pose()).min()
+            }
             _ => f64::NAN,
         }
     }

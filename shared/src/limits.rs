@@ -144,8 +144,24 @@ impl ArmMeter {
 
     /// Rates the next sample.
     pub fn push(&mut self, q: &[f64; NA]) {
-        let h = 1.0 / self.dt;
         let r = self.rate(q);
+        self.record(q, &r);
+    }
+
+    /// Records `q` as the next sample if it keeps every limit (true); otherwise the meter is
+    /// left as it was (false).
+    pub fn try_push(&mut self, q: &[f64; NA]) -> bool {
+        let r = self.rate(q);
+        let ok = r.within();
+        if ok {
+            self.record(q, &r);
+        }
+        ok
+    }
+
+    /// Takes `q`, whose ratios are `r`, as the next sample.
+    fn record(&mut self, q: &[f64; NA], r: &LimitRatios) {
+        let h = 1.0 / self.dt;
         for j in 0..NA {
             let v = (q[j] - self.q[j]) * h;
             self.a[j] = (v - self.v[j]) * h;
@@ -271,6 +287,20 @@ mod tests {
         }
         // The abrupt stop at 0.2 rad/s: 200 rad/s² in one tick.
         assert!(got.acceleration > 99.0 && !got.within());
+    }
+
+    #[test]
+    fn try_push_records_only_samples_within_the_limits() {
+        let mut m = ArmMeter::at_rest(&limits(), 1e-3, &[0.0; NA]);
+        // 1 mm/ms from rest is 1000 rad/s² in one tick: refused, nothing recorded.
+        assert!(!m.try_push(&[1e-3; NA]));
+        assert_eq!(m.state().0, &[0.0; NA]);
+        assert_eq!(m.ratios().max(), 0.0);
+        // A jerk-limited start (j = 100 rad/s³ for one tick) is taken.
+        let q = 100.0 * 1e-9 / 6.0;
+        assert!(m.try_push(&[q; NA]));
+        assert_eq!(m.state().0, &[q; NA]);
+        assert!(m.ratios().within() && m.ratios().jerk > 0.0);
     }
 
     #[test]

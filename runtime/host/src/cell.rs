@@ -240,8 +240,7 @@ impl Plant for OutputStage {
             self.ruckig.brake();
             return self.emit_ruckig();
         }
-        if self.meter.rate(&sp.arm).within() {
-            self.meter.push(&sp.arm);
+        if self.meter.try_push(&sp.arm) {
             let (q, v, a) = self.meter.state();
             self.ruckig.set_state(q, v, a);
             self.settled = v.iter().chain(a).all(|x| *x == 0.0);
