@@ -189,7 +189,7 @@ impl Plant {
 
     /// The gripper is closed far enough to hold a part.
     fn holding(&self) -> bool {
-        self.gripper >= 0.95
+        self.gripper >= prf_sim::navigation::HOLDING
     }
 
     /// The robot's clearance while the platform drives on a map (NaN otherwise).

@@ -142,6 +142,6 @@ fn an_unreachable_goal_is_a_typed_error() {
     let e = nav
         .plan([world.home.x, world.home.y, 0.0], [inside.x, inside.y, 0.0])
         .unwrap_err();
-    assert!(matches!(e, NavError::GoalBlocked { .. }), "{e}");
+    assert!(matches!(e, NavError::Blocked { end: "goal", .. }), "{e}");
     assert!(e.to_string().contains("keeps only"), "{e}");
 }

@@ -118,7 +118,11 @@ impl Program {
                 let seg = match (g, r.goal, r.skill) {
                     (Generator::BaseMove, Goal::Base(goal), _) => Segment::Base { goal },
                     (Generator::ArmRdmp, Goal::Tcp(goal), Some((skill, timing))) => {
-                        rt.skill_rdmp(skill as usize)?.ok_or(bad)?;
+                        rt.blob
+                            .skill(skill as usize)
+                            .map_err(LoadError::from)?
+                            .rdmp
+                            .ok_or(bad)?;
                         let steps = timing.steps as usize;
                         if steps > MAX_STEPS {
                             return Err(ProgramError::Reverse(ReverseError::TooLong { steps }));

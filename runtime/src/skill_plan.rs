@@ -118,7 +118,7 @@ pub enum Evaluation {
     TooFast {
         /// The last time scale tried.
         scale: f64,
-        /// The ratios it reached (the run stops at the first violation).
+        /// The ratios it reached (a run stops early once no scale up to the bound can help).
         ratios: LimitRatios,
     },
 }

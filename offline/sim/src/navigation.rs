@@ -39,19 +39,12 @@ const MAX_POSES: usize = 400_000;
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum NavError {
     #[error(
-        "the platform's start pose ({:.3} m, {:.3} m, {:.1}°) keeps only {clearance:.3} m from the nearest obstacle (needs {needed:.3} m)",
+        "the {end} pose ({:.3} m, {:.3} m, {:.1}°) keeps only {clearance:.3} m from the nearest obstacle (needs {needed:.3} m)",
         pose[0], pose[1], pose[2].to_degrees()
     )]
-    StartBlocked {
-        pose: [f64; 3],
-        clearance: f64,
-        needed: f64,
-    },
-    #[error(
-        "the goal pose ({:.3} m, {:.3} m, {:.1}°) keeps only {clearance:.3} m from the nearest obstacle (needs {needed:.3} m)",
-        pose[0], pose[1], pose[2].to_degrees()
-    )]
-    GoalBlocked {
+    Blocked {
+        /// "start" or "goal".
+        end: &'static str,
         pose: [f64; 3],
         clearance: f64,
         needed: f64,
@@ -159,20 +152,16 @@ impl<'c> Navigator<'c> {
     /// straight segments: `start` first, `goal` last.
     pub fn plan(&self, start: [f64; 3], goal: [f64; 3]) -> Result<Vec<[f64; 3]>, NavError> {
         let needed = self.clearance;
-        let (cs, cg) = (self.clearance_at(start), self.clearance_at(goal));
-        if cs < needed {
-            return Err(NavError::StartBlocked {
-                pose: start,
-                clearance: cs,
-                needed,
-            });
-        }
-        if cg < needed {
-            return Err(NavError::GoalBlocked {
-                pose: goal,
-                clearance: cg,
-                needed,
-            });
+        for (end, pose) in [("start", start), ("goal", goal)] {
+            let clearance = self.clearance_at(pose);
+            if clearance < needed {
+                return Err(NavError::Blocked {
+                    end,
+                    pose,
+                    clearance,
+                    needed,
+                });
+            }
         }
         if self.segment_ok(start, goal) {
             return Ok(vec![start, goal]);
@@ -357,7 +346,7 @@ pub struct DriveRecord {
 }
 
 /// Gripper opening at and above which the part counts as held.
-const HOLDING: f64 = 0.95;
+pub const HOLDING: f64 = 0.95;
 
 /// Where the part is: picked up when the gripper closes (its grasp is where the TCP is
 /// relative to the part then), put down where it is when the gripper opens.
@@ -380,16 +369,17 @@ impl PartTracker {
         }
     }
 
-    /// Follows the gripper: `tcp` is the TCP's world pose, `gripper` its opening (0…1).
-    pub fn update(&mut self, tcp: &Pose, gripper: f64) {
+    /// Follows the gripper at opening `gripper` (0…1); `tcp` gives the TCP's world pose, asked
+    /// only when the part is picked up or put down.
+    pub fn update(&mut self, gripper: f64, tcp: impl FnOnce() -> Pose) {
         let closed = gripper >= HOLDING;
         match (&self.held, closed) {
             (None, true) => {
-                let grasp = self.pose.inverse() * tcp;
+                let grasp = self.pose.inverse() * tcp();
                 self.held = Some((HeldPart::new(self.size, &grasp), grasp));
             }
             (Some((_, grasp)), false) => {
-                self.pose = tcp * grasp.inverse();
+                self.pose = tcp() * grasp.inverse();
                 self.held = None;
             }
             _ => {}
@@ -467,7 +457,7 @@ impl prf_runtime::executor::Plant for NavigatingCell<'_> {
         self.ideal.measured.base = base;
         let m = self.ideal.measured;
         self.part
-            .update(&tcp_world(&self.cell.model, m.base, &m.arm), m.gripper);
+            .update(m.gripper, || tcp_world(&self.cell.model, m.base, &m.arm));
         if sp.base_goal != self.goal {
             self.goal = sp.base_goal;
             let body = self.cell.drive_body(&m.arm, self.part.held().as_slice());
@@ -503,7 +493,7 @@ pub fn drive_phases(cell: &Cell, samples: &[Sample], mut part: PartTracker) -> V
     let mut out: Vec<DrivePhase> = Vec::new();
     let mut moving = false;
     for (k, s) in samples.iter().enumerate() {
-        part.update(&tcp_world(&cell.model, s.base, &s.arm), s.gripper);
+        part.update(s.gripper, || tcp_world(&cell.model, s.base, &s.arm));
         let next = samples.get(k + 1).map_or(s.base, |n| n.base);
         let moves = next != s.base
             || samples
