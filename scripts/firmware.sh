@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The cell-controller firmware (runtime/firmware: thumbv7em-none-eabihf, Cortex-M7) under QEMU
 # mps2-an500. Installs what it needs when missing (Debian's Rust toolchain with std sources,
-# its clippy, qemu-system-arm, binutils-arm-none-eabi for the linker).
+# its clippy, qemu-system-arm, binutils-arm-none-eabi for the linker, gcc-arm-none-eabi and
+# libstdc++-arm-none-eabi-newlib for Ruckig's C++ core in the output stage).
 #
 #   scripts/firmware.sh build                       build; prints the ELF's path
 #   scripts/firmware.sh run CELL.BLOB TASK.BIN [--stream FILE] [--figures FILE]
@@ -32,7 +33,8 @@ usage() { awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' 
 
 install_missing() {
   local need=()
-  for p in rustc-web cargo-web rust-web-src rust-web-clippy qemu-system-arm binutils-arm-none-eabi; do
+  for p in rustc-web cargo-web rust-web-src rust-web-clippy qemu-system-arm binutils-arm-none-eabi \
+    gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || need+=("$p")
   done
   if [ ${#need[@]} -gt 0 ]; then

@@ -7,8 +7,9 @@ cd "$(dirname "$0")/.."
 step() { printf '\n==> %s\n' "$*"; }
 
 # Debian's Rust (rustc/cargo 1.96 with matching std sources) cross-builds the no_std crates for
-# the Cortex-M7 cell controller; rustup cannot add targets on these machines.
-APT_PACKAGES=(rustc-web cargo-web rust-web-src)
+# the Cortex-M7 cell controller; rustup cannot add targets on these machines. Ruckig's C++ core
+# (prf-ruckig) is cross-compiled with Debian's arm-none-eabi-g++ and newlib.
+APT_PACKAGES=(rustc-web cargo-web rust-web-src gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib)
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
@@ -26,12 +27,12 @@ cargo fmt --all -- --check
 step "cargo clippy -D warnings"
 cargo clippy --workspace --all-targets --locked -q -- -D warnings
 
-step "no_std proof: prf-shared and prf-runtime for thumbv7em-none-eabihf (Cortex-M7)"
+step "no_std proof: prf-shared, prf-runtime and prf-ruckig for thumbv7em-none-eabihf (Cortex-M7)"
 # Debian's toolchain first in PATH for this command only; a separate target dir keeps its
 # artifacts apart from the rustup toolchain's.
 PATH="/usr/bin:$PATH" RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 /usr/bin/cargo build --locked -q \
   -Zbuild-std=core -Zbuild-std-features=compiler-builtins-mem \
-  --target thumbv7em-none-eabihf -p prf-shared -p prf-runtime --release \
+  --target thumbv7em-none-eabihf -p prf-shared -p prf-runtime -p prf-ruckig --release \
   --target-dir target/thumbv7em
 echo "built: $(ls target/thumbv7em/thumbv7em-none-eabihf/release/*.rlib | xargs -n1 basename | tr '\n' ' ')"
 

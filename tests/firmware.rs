@@ -34,7 +34,9 @@ fn every_task_meets_the_budgets_and_matches_the_host_stream() {
     assert_eq!(tasks.len(), 18);
     let reports = firmware::check_tasks(elf(), blob(), &tasks, dir(), 2, |_| {});
     let (mut tick_max, mut plan_max, mut ram_max, mut sum, mut ticks) = (0, 0, 0, 0, 0);
-    eprintln!("task                       ticks  plan Minstr  tick max  mean  RAM B   |Δq|");
+    eprintln!(
+        "task                       ticks  plan Minstr  tick max  mean  RAM B   |Δq|  shaped"
+    );
     for r in reports {
         let r = r.expect("task ran");
         let f = r
@@ -47,14 +49,15 @@ fn every_task_meets_the_budgets_and_matches_the_host_stream() {
             .comparison
             .unwrap_or_else(|e| panic!("{}: firmware vs host: {e}", r.label));
         eprintln!(
-            "{:<26} {:>6} {:>11.1} {:>9} {:>5} {:>6} {:.1e}",
+            "{:<26} {:>6} {:>11.1} {:>9} {:>5} {:>6} {:.1e} {:>6}",
             r.label,
             f.ticks,
             f.planning_instructions as f64 / 1e6,
             f.tick_max,
             f.tick_mean,
             f.ram_total,
-            c.arm
+            c.arm,
+            f.shaped
         );
         assert!(c.arm <= STREAM_TOLERANCE && c.base_goal <= STREAM_TOLERANCE);
         assert!(
@@ -64,6 +67,12 @@ fn every_task_meets_the_budgets_and_matches_the_host_stream() {
             c.emitted
         );
         assert_eq!(c.setpoints as u64, f.ticks);
+        // The output stage ran on every tick and passed the certified program unchanged.
+        assert_eq!(
+            f.shaped, 0,
+            "{}: the output stage shaped a certified program",
+            r.label
+        );
         assert!(
             f.tick_max <= MAX_TICK_INSTRUCTIONS,
             "{}: an executor tick took {} instructions (seq {})",

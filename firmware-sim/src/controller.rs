@@ -90,7 +90,7 @@ struct Plant {
     base_goal: [f64; 3],
     gripper: f64,
     close: bool,
-    brake: Option<Online>,
+    brake: Option<Online<NA>>,
     /// The brake trajectory reached standstill (Ruckig finished).
     braked: bool,
     limits: MotionLimits,
@@ -150,9 +150,9 @@ impl Plant {
         }
         let l = &self.limits;
         let mut b = Online::new(&self.q_ref, &l.arm_speed, &l.arm_acceleration, &l.arm_jerk);
-        let a: Vec<f64> = (0..NA)
-            .map(|j| self.qdd_ref[j].clamp(-l.arm_acceleration[j], l.arm_acceleration[j]))
-            .collect();
+        let a: [f64; NA] = core::array::from_fn(|j| {
+            self.qdd_ref[j].clamp(-l.arm_acceleration[j], l.arm_acceleration[j])
+        });
         b.set_state(&self.q_ref, &self.qd_ref, &a);
         b.brake();
         self.brake = Some(b);
@@ -163,11 +163,9 @@ impl Plant {
     fn step(&mut self) -> Result<()> {
         if let Some(b) = self.brake.as_mut() {
             self.braked = b.step()?;
-            for j in 0..NA {
-                self.q_ref[j] = b.position()[j];
-                self.qd_ref[j] = b.velocity()[j];
-                self.qdd_ref[j] = b.acceleration()[j];
-            }
+            self.q_ref = *b.position();
+            self.qd_ref = *b.velocity();
+            self.qdd_ref = *b.acceleration();
         }
         self.servo
             .step(&self.q_ref, &self.qd_ref, &self.qdd_ref, DT);

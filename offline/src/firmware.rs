@@ -3,7 +3,8 @@
 //! line), read the figures record and the setpoint stream it writes, and compare that stream
 //! with the host runtime's for the same blob and task block.
 
-use prf_host::ideal::execute;
+use prf_host::ideal::{IdealCell, execute_on};
+use prf_ruckig::StagedCell;
 use prf_runtime::executor::{ExecutorConfig, Mode, Setpoint};
 pub use prf_runtime::figures::Figures;
 use prf_runtime::stream::{RECORD_LEN, Record, decode};
@@ -61,6 +62,8 @@ pub enum FirmwareError {
     /// Planning failed (the message of the borrowing `PlanError`).
     #[error("plan: {0}")]
     Plan(String),
+    #[error("the host's output stage failed: {0}")]
+    OutputStage(prf_ruckig::RuckigError),
     #[error("the task has no program")]
     NoProgram,
     #[error("the host executor stopped: {0}")]
@@ -177,8 +180,9 @@ pub fn read_stream(path: &Path) -> Result<Vec<Record>> {
         .collect())
 }
 
-/// The host runtime's setpoints for the task in `block` on blob `blob`: the firmware's
-/// computation (plan, then the executor against the ideal cell), run here.
+/// The host runtime's emitted setpoints for the task in `block` on blob `blob`: the firmware's
+/// computation (plan, then the executor through the output stage against the ideal cell), run
+/// here.
 pub fn host_stream(blob: &[u8], block: &[u8]) -> Result<Vec<Setpoint>> {
     let rt = Runtime::load(blob).map_err(FirmwareError::Load)?;
     let task = task_block::decode(block).map_err(FirmwareError::TaskBlock)?;
@@ -186,13 +190,17 @@ pub fn host_stream(blob: &[u8], block: &[u8]) -> Result<Vec<Setpoint>> {
     let Some(program) = p.program else {
         return Err(FirmwareError::NoProgram);
     };
-    let run = execute(
+    let ideal = IdealCell::new(rt.model.home, &task.home, rt.config.rdmp.dt);
+    let mut cell = StagedCell::new(ideal, &rt.limits);
+    let run = execute_on(
         &rt,
         &program,
         &task.home,
         ExecutorConfig::default(),
         MAX_TICKS,
-    );
+        &mut cell,
+    )
+    .map_err(FirmwareError::OutputStage)?;
     if let Some(f) = run.fault {
         return Err(FirmwareError::HostFault(f));
     }

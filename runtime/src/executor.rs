@@ -123,6 +123,11 @@ pub trait Plant {
     fn measured(&self) -> Measured;
     /// Takes the tick's setpoint.
     fn command(&mut self, sp: &Setpoint) -> Result<(), Self::Error>;
+    /// What the plant passed on for the last commanded `sp` (an output stage's emitted
+    /// setpoint); by default `sp` itself.
+    fn emitted(&self, sp: &Setpoint) -> Setpoint {
+        *sp
+    }
 }
 
 /// Why the executor stopped.

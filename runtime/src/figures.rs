@@ -4,9 +4,9 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Longest encoded [`Figures`] record, bytes (postcard varints: 24 u64 of at most 10 bytes,
+/// Longest encoded [`Figures`] record, bytes (postcard varints: 25 u64 of at most 10 bytes,
 /// a u32 of at most 5, a flag).
-pub const MAX_LEN: usize = 246;
+pub const MAX_LEN: usize = 256;
 
 /// Ticks, max and mean instructions of the executor steps in one mode.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -48,6 +48,9 @@ pub struct Figures {
     pub lateness_max: u64,
     /// Ticks whose work overran the 1 ms period.
     pub overruns: u64,
+    /// Ticks whose setpoint the output stage's Ruckig had to change (0 for a certified
+    /// program).
+    pub shaped: u64,
     /// CRC-32 of the setpoint stream's records ([`crate::stream`]).
     pub crc32: u32,
     /// Static RAM, bytes: data, bss, the stack's high-water mark, their sum.
@@ -98,6 +101,7 @@ mod tests {
             loop_max: u64::MAX,
             lateness_max: u64::MAX,
             overruns: u64::MAX,
+            shaped: u64::MAX,
             crc32: u32::MAX,
             ram_data: u64::MAX,
             ram_bss: u64::MAX,

@@ -251,7 +251,7 @@ impl<'c> Navigator<'c> {
 /// Follows a path with Ruckig within the platform's limits: one straight segment at a time,
 /// phase-synchronised from rest to rest, so the platform stays on the checked segments.
 pub struct Drive {
-    online: Online,
+    online: Online<3>,
     /// Corners still to reach, next first.
     corners: std::collections::VecDeque<[f64; 3]>,
     pose: [f64; 3],
@@ -394,6 +394,21 @@ impl PartTracker {
     /// Whether the gripper holds the part.
     pub fn holding(&self) -> bool {
         self.held.is_some()
+    }
+
+    /// The part's world pose where it was last put down (or its start pose).
+    pub fn rest_pose(&self) -> &Pose {
+        &self.pose
+    }
+
+    /// The held part's grasp (TCP in the part frame).
+    pub fn grasp(&self) -> Option<&Pose> {
+        self.held.as_ref().map(|(_, g)| g)
+    }
+
+    /// The part's box size, m.
+    pub fn size(&self) -> [f64; 3] {
+        self.size
     }
 }
 

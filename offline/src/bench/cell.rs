@@ -9,13 +9,13 @@ use crate::bench::alloc_count::allocations;
 use crate::cli::args::{read_blob, runtime};
 use crate::cli::child::{ChildGuard, spawn_firmware};
 use anyhow::{Context, Result, anyhow, bail};
-use prf_host::cell::{Cell, CellConfig, TRACKING_GAIN};
+use prf_host::cell::{Cell, CellConfig};
 use prf_host::ideal::execute;
 use prf_host::stats::percentiles;
 use prf_ipc::clock::now_ns;
 use prf_ipc::link;
 use prf_ipc::messages::SetpointMsg;
-use prf_ruckig::Online;
+use prf_ruckig::{Online, RuckigError, TRACKING_GAIN, baseline};
 use prf_runtime::executor::{ExecutorConfig, planar};
 use prf_runtime::plan::plan;
 use prf_shared::limits::MotionLimits;
@@ -210,30 +210,41 @@ pub fn run(a: &Args) -> Result<()> {
     let program = p.program.context("no program")?;
     let ideal = execute(&rt, &program, &ft.home, ExecutorConfig::default(), 1 << 24);
     let l = MotionLimits::kmr_iiwa(&rt.model);
-    let mut out = Online::new(
-        &rt.model.home,
-        &l.arm_speed,
-        &l.arm_acceleration,
-        &l.arm_jerk,
-    );
-    let mut times = Vec::with_capacity(ideal.setpoints.len());
-    let a0 = allocations();
-    for sp in &ideal.setpoints {
-        let t = Instant::now();
-        out.track(&sp.arm, &sp.arm_velocity, TRACKING_GAIN);
-        out.step()?;
-        times.push(t.elapsed().as_nanos() as f64 * 1e-3);
+    let q0 = &rt.model.home;
+    let (v, acc, j) = (&l.arm_speed, &l.arm_acceleration, &l.arm_jerk);
+    let mut shim = Online::new(q0, v, acc, j);
+    let mut crate_ = baseline::Online::new(q0, v, acc, j);
+    // Alternating passes over the same setpoints, so both meet the same machine load.
+    let (mut t_shim, mut t_crate) = (Vec::new(), Vec::new());
+    let (mut a_shim, mut a_crate) = (0, 0);
+    for _ in 0..3 {
+        a_shim += track_program(&mut shim, &ideal.setpoints, &mut t_shim)?;
+        a_crate += track_program(&mut crate_, &ideal.setpoints, &mut t_crate)?;
     }
-    let allocs = (allocations() - a0) as f64 / ideal.setpoints.len() as f64;
-    let r = percentiles(&mut times);
+    let n = t_shim.len() as f64;
+    let (r_shim, r_crate) = (percentiles(&mut t_shim), percentiles(&mut t_crate));
     println!(
-        "\nRuckig as the output stage's safety net (7 axes, velocity interface; a planned program passes without it), {} updates along a {:.1} s program: median {:.2} µs, p99 {:.2} µs, max {:.1} µs; {allocs:.1} allocations per update (the crate's Vec wrapper)",
+        "\nRuckig as the output stage's safety net (7 axes, velocity interface; a planned program passes without it), 3 × {} updates along a {:.1} s program, per update:",
         ideal.setpoints.len(),
-        ideal.setpoints.len() as f64 * 1e-3,
-        r[0],
-        r[1],
-        r[3]
+        ideal.setpoints.len() as f64 * 1e-3
     );
+    println!(
+        "  {:<44} {:>8} {:>8} {:>8} {:>12}",
+        "", "p50 µs", "p99 µs", "max µs", "allocations"
+    );
+    for (label, r, allocs) in [
+        ("project's shim (prf_ruckig::Online<7>)", &r_shim, a_shim),
+        ("`ruckig` crate (cxx wrapper, baseline)", &r_crate, a_crate),
+    ] {
+        println!(
+            "  {label:<44} {:>8.2} {:>8.2} {:>8.1} {:>12.1}",
+            r[0],
+            r[1],
+            r[3],
+            allocs as f64 / n
+        );
+    }
+    println!("  median ratio shim / crate: {:.2}", r_shim[0] / r_crate[0]);
 
     // (2) The 1 kHz loop against firmware-sim.
     let cell_name = format!("bench-{}", std::process::id());
@@ -271,4 +282,46 @@ pub fn run(a: &Args) -> Result<()> {
         misses as f64 / ticks as f64 * 100.0
     );
     Ok(())
+}
+
+/// The two Ruckig bindings' tracking interface, for timing them side by side.
+trait Tracker {
+    fn track(&mut self, p: &[f64; 7], v: &[f64; 7], gain: f64);
+    fn step(&mut self) -> Result<bool, RuckigError>;
+}
+
+impl Tracker for Online<7> {
+    fn track(&mut self, p: &[f64; 7], v: &[f64; 7], gain: f64) {
+        Online::track(self, p, v, gain)
+    }
+    fn step(&mut self) -> Result<bool, RuckigError> {
+        Online::step(self)
+    }
+}
+
+impl Tracker for baseline::Online<7> {
+    fn track(&mut self, p: &[f64; 7], v: &[f64; 7], gain: f64) {
+        baseline::Online::track(self, p, v, gain)
+    }
+    fn step(&mut self) -> Result<bool, RuckigError> {
+        baseline::Online::step(self)
+    }
+}
+
+/// Tracks every setpoint once (track + step, as the safety net would): each update's time in
+/// µs appended to `times`; the allocations made.
+fn track_program(
+    out: &mut impl Tracker,
+    setpoints: &[prf_runtime::executor::Setpoint],
+    times: &mut Vec<f64>,
+) -> Result<u64> {
+    times.reserve(setpoints.len());
+    let a0 = allocations();
+    for sp in setpoints {
+        let t = Instant::now();
+        out.track(&sp.arm, &sp.arm_velocity, TRACKING_GAIN);
+        out.step()?;
+        times.push(t.elapsed().as_nanos() as f64 * 1e-3);
+    }
+    Ok(allocations() - a0)
 }

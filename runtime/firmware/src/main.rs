@@ -1,8 +1,10 @@
 //! PRF cell-controller firmware: the no_std runtime on a Cortex-M7.
 //!
 //! It reads the blob (BLOB region) and a task block (TASK region) in place, validates both,
-//! plans the task, and executes the program against the runtime's ideal cell, paced at 1 kHz
-//! by embassy-time's `Ticker` on a SysTick time driver. Over semihosting it prints the timing
+//! plans the task, and executes the program through the output stage (`prf_ruckig`, the same
+//! as the host cell's: a certified setpoint passes unchanged, anything else is shaped by Ruckig's
+//! C++ core) against the runtime's ideal cell, paced at 1 kHz by embassy-time's `Ticker` on a
+//! SysTick time driver. The stream is what the output stage emitted. Over semihosting it prints the timing
 //! figures (instructions of loading, planning and every executor tick; under
 //! `qemu-system-arm -icount shift=0` SysTick counts are instruction counts), static RAM
 //! (data + bss + the stack's high-water mark) and a digest of the setpoint stream (CRC-32 of
@@ -29,7 +31,8 @@ use cortex_m_semihosting::hprintln;
 use embassy_time::{Duration, Instant};
 use fault::{Exit, exit};
 use measure::Stack;
-use prf_runtime::executor::{Executor, ExecutorConfig, Mode};
+use prf_ruckig::StagedCell;
+use prf_runtime::executor::{Executor, ExecutorConfig, Mode, Plant};
 use prf_runtime::figures::{self, Figures, ModeFigures};
 use prf_runtime::ideal::IdealCell;
 use prf_runtime::program::Program;
@@ -210,7 +213,8 @@ fn execute(
         ExecutorConfig::default(),
         &mut reversal,
     );
-    let mut cell = IdealCell::new(rt.model.home, &task.home, rt.config.rdmp.dt);
+    let ideal = IdealCell::new(rt.model.home, &task.home, rt.config.rdmp.dt);
+    let mut cell = StagedCell::new(ideal, &rt.limits);
     let period = Duration::from_hz(TICK_HZ as u64);
     let mut t = Instant::from_ticks(0);
     let (mut late, mut busy, mut misses) = (0u64, 0, 0);
@@ -224,7 +228,13 @@ fn execute(
         block_on(ticker.next());
         let woke = counts();
         late = late.max(woke.saturating_sub(due));
-        let Ok(sp) = ex.step(t, &mut cell);
+        let sp = match ex.step(t, &mut cell) {
+            Ok(sp) => cell.emitted(&sp),
+            Err(e) => {
+                hprintln!("prf-firmware: the output stage failed: {}", e);
+                return Exit::NotDone;
+            }
+        };
         let used = counts() - woke;
         let record = stream::encode(&sp);
         crc.update(&record);
@@ -274,6 +284,7 @@ fn execute(
     figures.tick_mean = sum * k / ticks.max(1);
     (figures.loop_max, figures.lateness_max) = (busy * k, late * k);
     figures.overruns = misses;
+    figures.shaped = cell.stage.shaped().0;
     for (f, (n, max, sum)) in figures.by_mode.iter_mut().zip(by_mode) {
         *f = ModeFigures {
             ticks: n,
@@ -302,7 +313,12 @@ fn execute(
             sum * k / n.max(1)
         );
     }
-    hprintln!("stream {} setpoints crc32 {:08x}", ticks, figures.crc32);
+    hprintln!(
+        "stream {} setpoints crc32 {:08x}; output stage shaped {} ticks",
+        ticks,
+        figures.crc32,
+        figures.shaped
+    );
     match ex.fault() {
         Some(f) => {
             hprintln!("prf-firmware: the executor stopped: {}", f);

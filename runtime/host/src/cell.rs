@@ -14,13 +14,13 @@ use embassy_time::{Duration, Instant, Ticker};
 use prf_ipc::clock::now_ns;
 use prf_ipc::link::{self, CellPorts, Ipc, IpcError};
 use prf_ipc::messages::{JointStateMsg, SetpointMsg, flags, status};
-use prf_ruckig::{Online, RuckigError};
+use prf_ruckig::{OutputStage, RuckigError};
 use prf_runtime::Runtime;
-use prf_runtime::executor::{Executor, ExecutorConfig, Measured, Mode, Plant, Setpoint};
+use prf_runtime::executor::{Executor, ExecutorConfig, Measured, Mode, Setpoint};
 use prf_runtime::program::Program;
 use prf_runtime::reverse::Reversal;
 use prf_shared::NA;
-use prf_shared::limits::{ArmMeter, LimitRatios, MotionLimits};
+use prf_shared::limits::{LimitRatios, MotionLimits};
 use prf_shared::se3::Pose;
 use serde::Serialize;
 
@@ -38,9 +38,6 @@ pub enum CellError {
     #[error("starting the controller liveness thread failed")]
     Thread(#[source] std::io::Error),
 }
-
-/// Position gain of the Ruckig output stage, 1/s (see [`Online::track`]).
-pub const TRACKING_GAIN: f64 = 20.0;
 
 /// Settings of the host cell.
 #[derive(Clone, Debug)]
@@ -174,89 +171,6 @@ pub struct Cell {
     limits: MotionLimits,
     last: JointStateMsg,
     liveness: Liveness,
-}
-
-/// The output stage between the executor and the controller: the executor's plant, its
-/// measured state the newest joint state. A setpoint that keeps the emitted stream within the
-/// position, speed, acceleration and jerk limits (rated by finite differences at 1 ms, as the
-/// controller sees it) passes unchanged: a planned program is certified within the limits, so
-/// what is emitted is what was certified. Otherwise Ruckig shapes it (the safety net; every
-/// shaped tick is counted and reported), and on a fault or a stop request Ruckig brakes from
-/// the emitted state.
-struct OutputStage {
-    ruckig: Online,
-    /// Rates the emitted stream.
-    meter: ArmMeter,
-    measured: Measured,
-    /// Brake instead of tracking (a fault, or a stop on request).
-    stopping: bool,
-    /// The output is at rest (set by the last command).
-    settled: bool,
-    /// Ticks whose setpoint Ruckig had to change, and the largest change, rad.
-    shaped: u64,
-    max_shaping: f64,
-}
-
-impl OutputStage {
-    fn new(q: &[f64; NA], limits: &MotionLimits, measured: Measured) -> Self {
-        let l = limits;
-        OutputStage {
-            ruckig: Online::new(q, &l.arm_speed, &l.arm_acceleration, &l.arm_jerk),
-            meter: ArmMeter::at_rest(limits, prf_ruckig::DT, q),
-            measured,
-            stopping: false,
-            settled: false,
-            shaped: 0,
-            max_shaping: 0.0,
-        }
-    }
-
-    /// The emitted position and velocity.
-    fn output(&self) -> ([f64; NA], [f64; NA]) {
-        let (q, v, _) = self.meter.state();
-        (*q, *v)
-    }
-
-    /// Emits Ruckig's next sample.
-    fn emit_ruckig(&mut self) -> Result<(), RuckigError> {
-        self.settled = self.ruckig.step()?;
-        let q: [f64; NA] = core::array::from_fn(|j| self.ruckig.position()[j]);
-        self.meter.push(&q);
-        Ok(())
-    }
-}
-
-impl Plant for OutputStage {
-    type Error = RuckigError;
-
-    fn measured(&self) -> Measured {
-        self.measured
-    }
-
-    /// Passes the setpoint when it keeps the stream within the limits, else shapes it with
-    /// Ruckig; brakes on a fault or a stop request.
-    fn command(&mut self, sp: &Setpoint) -> Result<(), RuckigError> {
-        if sp.mode == Mode::Fault || self.stopping {
-            self.ruckig.brake();
-            return self.emit_ruckig();
-        }
-        if self.meter.try_push(&sp.arm) {
-            let (q, v, a) = self.meter.state();
-            self.ruckig.set_state(q, v, a);
-            self.settled = v.iter().chain(a).all(|x| *x == 0.0);
-            return Ok(());
-        }
-        self.ruckig.track(&sp.arm, &sp.arm_velocity, TRACKING_GAIN);
-        self.emit_ruckig()?;
-        let (q, _, _) = self.meter.state();
-        let off = q
-            .iter()
-            .zip(&sp.arm)
-            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        self.shaped += 1;
-        self.max_shaping = self.max_shaping.max(off);
-        Ok(())
-    }
 }
 
 /// Timing samples of one execution, allocated and touched before the loop (no page faults
@@ -398,17 +312,20 @@ impl Cell {
                 report.fault_t_ns = Some(now_ns());
                 break;
             }
-            stage.measured = measured(&js);
-            stage.stopping = stop_ticks.is_some_and(|n| k >= n);
+            stage.set_measured(measured(&js));
+            if stop_ticks.is_some_and(|n| k >= n) {
+                stage.stop();
+            }
             let sp = ex.step(woke, &mut stage)?;
-            if sp.mode == Mode::Fault || stage.stopping {
+            if sp.mode == Mode::Fault || stage.stopping() {
                 if let (None, Some(f)) = (&report.fault, ex.fault()) {
                     report.fault = Some(format!("executor: {f}"));
                     report.fault_t_ns = Some(now_ns());
                 }
-                report.stopped = stage.stopping;
+                report.stopped = stage.stopping();
             }
-            let finished = (ex.done() || report.fault.is_some() || stage.stopping) && stage.settled;
+            let finished =
+                (ex.done() || report.fault.is_some() || stage.stopping()) && stage.settled();
             self.send(k, &sp, stage.output(), report.fault.is_some(), finished)?;
             if Instant::now() > scheduled + period {
                 report.deadline_misses += 1;
@@ -421,9 +338,8 @@ impl Cell {
         report.loop_allocations = probe.zip(allocations_before).map(|(f, a)| f() - a);
         report.ticks = k;
         report.duration_s = k as f64 * 1e-3;
-        report.shaped = stage.shaped;
-        report.max_shaping = stage.max_shaping;
-        report.emitted = stage.meter.ratios();
+        (report.shaped, report.max_shaping) = stage.shaped();
+        report.emitted = stage.ratios();
         timing.into_report(&mut report);
         Ok(report)
     }

@@ -15,7 +15,7 @@ use prf_shared::se3::Pose;
 pub struct Execution {
     /// The measured cell after every tick, at 1 kHz (dataset trajectory format).
     pub samples: Vec<Sample>,
-    /// Every setpoint.
+    /// Every setpoint, as the plant passed it on ([`Plant::emitted`]).
     pub setpoints: Vec<Setpoint>,
     pub fault: Option<Fault>,
 }
@@ -52,6 +52,7 @@ pub fn execute_on<P: Plant>(
     let (mut samples, mut setpoints) = (Vec::new(), Vec::new());
     for k in 0..max_ticks {
         let sp = ex.step(now, plant)?;
+        let sp = plant.emitted(&sp);
         setpoints.push(sp);
         let m = plant.measured();
         samples.push(Sample {
