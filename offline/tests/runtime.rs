@@ -594,7 +594,9 @@ fn a_fast_demonstration_is_time_scaled_not_clipped() {
 /// The platform navigates (issue 21): every drive of the 18 planned programs on the
 /// navigating ideal cell keeps the world's acceptable clearance r (less half the check step)
 /// for the platform, the arm and the held part, checked on every 1 ms sample against the true
-/// boxes; the straight-line drives of the plain ideal cell do not.
+/// boxes; the straight-line drives of the plain ideal cell do not. The held part keeps r over
+/// the whole time it is held (arm motions too) from every box but its supports, and is put
+/// down within 0.1 mm of its surface.
 #[test]
 fn every_drive_of_the_planned_programs_is_clear() {
     use prf_sim::navigation::{
@@ -605,6 +607,7 @@ fn every_drive_of_the_planned_programs_is_clear() {
     let cell = Cell::new(&world, &rt.model);
     let r = world.clearance.acceptable;
     let mut straight_min = f64::INFINITY;
+    let (mut held_min, mut rest) = (f64::INFINITY, (f64::INFINITY, f64::NEG_INFINITY));
     for ft in world_tasks(&world) {
         let p = plan(&rt, &ft.task()).expect("plan");
         let program = p.program.as_ref().expect("program");
@@ -640,6 +643,35 @@ fn every_drive_of_the_planned_programs_is_clear() {
                 ph.min
             );
         }
+        // The held part over the whole time it is held (arm motions and drives), against
+        // every box but the surfaces it is picked from and put down on.
+        let held = prf_sim::validate::check_held_part(&cell, &run.samples, part(), 0.002);
+        line += &format!(
+            " held part {:.1} mm ({}), against its supports {:+.3} mm",
+            held.min * 1e3,
+            held.obstacle,
+            held.support * 1e3
+        );
+        assert!(
+            held.min >= r - CHECK_STEP / 2.0,
+            "{}: the held part comes within {:.1} mm of {} at t = {:.3} s",
+            ft.label(),
+            held.min * 1e3,
+            held.obstacle,
+            held.min_t
+        );
+        // The RDMP reaches the goal pose to within a fraction of a millimetre: the part may
+        // press that much into the surface it is put down on, no more.
+        assert!(
+            held.support >= -1e-4,
+            "{}: the part sinks {:.3} mm into {} at t = {:.3} s",
+            ft.label(),
+            -held.support * 1e3,
+            held.support_name,
+            held.support_t
+        );
+        held_min = held_min.min(held.min);
+        rest = (rest.0.min(held.support), rest.1.max(held.support));
         println!("{line}");
         // The same program on the straight-line ideal cell, for comparison.
         let plain = execute(&rt, program, &ft.home, ExecutorConfig::default(), 600_000);
@@ -648,8 +680,11 @@ fn every_drive_of_the_planned_programs_is_clear() {
         }
     }
     println!(
-        "straight-line drives: smallest clearance {:.1} mm",
-        straight_min * 1e3
+        "straight-line drives: smallest clearance {:.1} mm; held part: smallest clearance {:.1} mm, against its supports {:+.3}…{:+.3} mm",
+        straight_min * 1e3,
+        held_min * 1e3,
+        rest.0 * 1e3,
+        rest.1 * 1e3
     );
     assert!(
         straight_min < 0.0,

@@ -7,6 +7,7 @@
 use super::ik::{self, IkConfig, IkError};
 use super::rrt::{self, RrtConfig, RrtError, Space};
 use super::timing::{Limits, Motion};
+use crate::navigation::{PartTracker, part_size};
 use crate::validate::{self, MotionLimits};
 use crate::world::geometry::{Cell, Obstacle};
 use crate::world::{AffordedTask, Planar, World, planar};
@@ -375,6 +376,36 @@ impl<'w> Generator<'w> {
         )
     }
 
+    /// The part, held from the pick to the place, keeps r_d from every box but the surfaces it
+    /// is picked from and put down on, and does not sink into those (the pieces were planned
+    /// for the robot alone; this is the ground truth with the part).
+    fn check_held_part(
+        &self,
+        samples: &[Sample],
+        kind: &str,
+        start: &Pose,
+    ) -> Result<(), GenError> {
+        let tracker = PartTracker::new(part_size(self.world, kind), *start);
+        let r = validate::check_held_part(&self.cell, samples, tracker, self.cfg.check_resolution);
+        let r_d = self.world.clearance.demonstration;
+        if r.min < r_d || r.support < -validate::SINK_TOLERANCE {
+            return Err(GenError::Check {
+                what: format!("the held {kind}"),
+                detail: format!(
+                    "{:.1} mm from {} at t = {:.2} s (r_d {:.0} mm); {:.1} mm into its support {} at t = {:.2} s",
+                    r.min * 1e3,
+                    r.obstacle,
+                    r.min_t,
+                    r_d * 1e3,
+                    -r.support * 1e3,
+                    r.support_name,
+                    r.support_t
+                ),
+            });
+        }
+        Ok(())
+    }
+
     /// Platform path through the given planar poses (yaw in rad, unwrapped on the way).
     fn base_motion(&self, poses: &[[f64; 3]]) -> Result<Motion<3>, GenError> {
         let mut w: Vec<[f64; 3]> = Vec::new();
@@ -500,6 +531,7 @@ impl<'w> Generator<'w> {
             gripper: 0.0,
         });
         let samples = self.sample(&pieces, 0.0);
+        self.check_held_part(&samples, &w.parts[t.part].kind, &w.part_pose_at(t.from))?;
         let placed = |id: &str, kind: &str, pose: &Pose| Placed {
             id: id.to_string(),
             kind: kind.to_string(),

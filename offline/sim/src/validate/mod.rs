@@ -5,6 +5,10 @@
 //! interpolation, fine enough that no collision sphere moves more than `resolution` between
 //! two checks), so it does not trust the planner that made the program.
 
+mod held;
+
+pub use held::{PartReport, SINK_TOLERANCE, SUPPORT_GAP, check_held_part};
+
 use crate::world::geometry::{Cell, Contact};
 use prf_files::dataset::Sample;
 use prf_shared::NA;
