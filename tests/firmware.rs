@@ -169,3 +169,53 @@ fn bad_input_and_exceptions_exit_with_a_message() {
         assert!(r.stdout.contains(message), "{args:?}:\n{}", r.stdout);
     }
 }
+
+/// Issue 22: a task the controller cannot do safely (the part poses moved 2 cm and turned 8°:
+/// every task risky) is refused within the planning bound, with what is known of J*, and
+/// nothing is executed.
+#[test]
+fn infeasible_tasks_are_refused_within_the_planning_bound() {
+    let mut world = World::example();
+    for t in &mut world.location_types {
+        t.part_pose.xyz[0] += 0.02;
+        t.part_pose.rpy_deg[2] += 8.0;
+    }
+    let blob = blob().as_os_str();
+    for (part, from, to) in [
+        ("Part2", "CNC1", "CNC2"),
+        ("Part1", "Table1", "Printer1"),
+        ("Part1", "CNC1", "Table1"),
+    ] {
+        let t = FloorTask::new(&world, part, from, to).expect("task");
+        let block = task_block(&t, &format!("risky-{part}-{from}-{to}.task"));
+        let r = firmware::run(
+            elf(),
+            [
+                "--blob".as_ref(),
+                blob,
+                "--task".as_ref(),
+                block.as_os_str(),
+            ],
+        )
+        .expect("run");
+        let f = r
+            .figures
+            .as_ref()
+            .unwrap_or_else(|| panic!("no figures\n{}", r.stdout));
+        eprintln!(
+            "{}: planning {:.1} M instructions, {} integrations",
+            t.label(),
+            f.planning_instructions as f64 / 1e6,
+            f.integrations
+        );
+        assert_eq!(r.status, Some(9), "{}:\n{}", t.label(), r.stdout);
+        assert!(r.stdout.contains("risky: J*"), "{}", r.stdout);
+        assert!(!f.feasible && f.ticks == 0, "{}: executed", t.label());
+        assert!(
+            f.planning_instructions <= MAX_PLANNING_INSTRUCTIONS,
+            "{}: planning took {} instructions",
+            t.label(),
+            f.planning_instructions
+        );
+    }
+}

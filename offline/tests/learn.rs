@@ -478,3 +478,42 @@ fn learning_takes_r_d_from_the_dataset_and_refuses_to_guess() {
         "{report}"
     );
 }
+
+/// The field's lower bound over a ball (the planner's admissible bound at a goal pose) is
+/// below the field at random points of the ball, inside and outside the grid box.
+#[test]
+fn the_lower_bound_within_a_ball_is_below_every_lookup_in_it() {
+    let f = fixture();
+    let mut rng = StdRng::seed_from_u64(22);
+    let mut tight = 0.0f64;
+    for lt in &f.knowledge.location_types {
+        let Some(learned) = lt.field.as_ref() else {
+            continue;
+        };
+        let field = learned.field();
+        let dims = field.dims();
+        let lo = field.node_position(0, 0, 0);
+        let hi = field.node_position(dims[0] - 1, dims[1] - 1, dims[2] - 1);
+        for _ in 0..400 {
+            // Some centres beyond the grid box, so balls cross its faces too.
+            let p = Vector3::from_fn(|i, _| rng.random_range(lo[i] - 0.05..hi[i] + 0.05));
+            let delta = rng.random_range(0.0..0.01);
+            let bound = field.distance_lower_within(&p, delta);
+            assert!(bound <= field.distance(&p) + 1e-12);
+            for _ in 0..20 {
+                let u = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+                let x = p + u.normalize() * delta * rng.random_range(0.0..=1.0f64).cbrt();
+                let d = field.distance(&x);
+                assert!(
+                    d >= bound - 1e-12,
+                    "{d} < bound {bound} at {x:?} (p {p:?}, δ {delta})"
+                );
+                tight = tight.max(d - bound);
+            }
+        }
+    }
+    println!(
+        "largest gap between a lookup and the ball's bound: {:.2} mm",
+        tight * 1e3
+    );
+}

@@ -168,8 +168,10 @@ fn two_similar_demonstrations_leave_printer_and_table_tasks_symbolically_infeasi
     }
 }
 
-/// Risk of `rdmp` from q_a,H to `goal` by a second route: the whole-trajectory integrator
-/// and the risk accumulator, no pruning. `None` if integration fails.
+/// Risk of `rdmp` from q_a,H to `goal` by a second route: the timing from
+/// `prf_shared::timing::pace` (a property of the candidate alone), then the whole trajectory
+/// integrated here with the risk accumulator, no pruning, no bound, and the final TCP checked
+/// against the reach tolerances here. `None` if integration fails or the goal is missed.
 fn brute_force_risk(
     rt: &Runtime<'_>,
     side: &prf_runtime::skill_plan::Side<'_>,
@@ -177,54 +179,70 @@ fn brute_force_risk(
     grasp: usize,
     skill: u16,
 ) -> Option<f64> {
+    use prf_runtime::skill_plan::{REACH_ANGLE, REACH_POSITION};
     let rdmp = rt.skill_rdmp(skill as usize).ok()??;
     let goal = side.goal(stance, grasp)?;
     let base = &side.arm_bases[stance];
-    // The timing (time scale, ticks) is a property of the candidate alone; the risk of the
-    // stream at that timing is integrated here on its own, without bound.
-    let Evaluation::Risk { timing, .. } =
-        evaluate_arm_motion(rt, &rdmp, goal, &side.field, base, f64::INFINITY)
-    else {
-        return None;
-    };
     let model = &rt.model;
-    let rdmp = rdmp.time_scaled(timing.scale);
     let q0 = JointVector::from(model.home);
+    let timing =
+        prf_shared::timing::pace(model, &rt.limits, &rt.config.rdmp, &rdmp, &q0, goal).ok()?;
+    let rdmp = rdmp.time_scaled(timing.scale);
     let mut run = RdmpRun::new(model, &rdmp, &q0, goal, &rt.config.rdmp).ok()?;
     run.set_steps(timing.steps as usize);
     let mut acc = RiskAccumulator::default();
-    acc.add(model, &side.field, base, &ArmKinematics::new(model, &q0));
+    let mut kin = ArmKinematics::new(model, &q0);
+    acc.add(model, &side.field, base, &kin);
     while !run.finished() {
         let s = run.step(model, &rdmp, &rt.config.rdmp).ok()?;
-        acc.add(model, &side.field, base, &ArmKinematics::new(model, &s.q));
+        kin = ArmKinematics::new(model, &s.q);
+        acc.add(model, &side.field, base, &kin);
     }
-    Some(acc.risk())
+    let missed = (kin.tcp.translation.vector - goal.translation.vector).norm() > REACH_POSITION
+        || kin.tcp.rotation.angle_to(&goal.rotation) > REACH_ANGLE;
+    (!missed).then(|| acc.risk())
 }
 
-#[test]
-fn skill_plan_equals_the_brute_force_grid() {
-    // A reduced knowledge base with risky candidates: Part1 from a CNC with the top grasp
-    // (3 demonstrations) and to a Printer with the angled grasp, Part2 from a Table to a
-    // Printer with the angled grasp only.
-    let world = World::example();
-    let bytes = blob_of(&world, |p, f, t, (a1, a2, g)| {
+/// The reduced knowledge base of the brute-force tests: risky candidates. Part1 from a CNC
+/// with the top grasp (3 demonstrations) and to a Printer with the angled grasp, Part2 from a
+/// Table to a Printer with the angled grasp only.
+fn reduced_blob(world: &World) -> Vec<u8> {
+    blob_of(world, |p, f, t, (a1, a2, g)| {
         (a1, a2) == (0, 0)
             && match (p, f, t) {
                 ("Part1", "CNC", t) => g == 0 || t == "Printer",
                 ("Part2", "Table", "Printer") => g == 1,
                 _ => false,
             }
-    });
-    let rt = Runtime::load(&bytes).expect("load");
+    })
+}
+
+/// The example cell with every location type's nominal part pose moved by (dx, 0) m and
+/// turned by `yaw_deg` (the knowledge base stays the one learned at the nominal poses).
+fn shifted_world(dx: f64, yaw_deg: f64) -> World {
+    let mut world = World::example();
+    for t in &mut world.location_types {
+        t.part_pose.xyz[0] += dx;
+        t.part_pose.rpy_deg[2] += yaw_deg;
+    }
+    world
+}
+
+/// SkillPlan-PTT equals the full grid of brute-force risks on every task of `world` that the
+/// blob `bytes` affords: J*, the choice and the documented tie order. The number of tasks
+/// with J* > 0, and of candidates the planner skipped by their bound.
+fn assert_plans_equal_the_grid(world: &World, bytes: &[u8]) -> (usize, u32) {
+    let rt = Runtime::load(bytes).expect("load");
     let classes = PttClasses::of(&rt).expect("classes");
-    let mut risky = 0;
-    for ft in world_tasks(&world) {
+    let (mut risky, mut bounded) = (0, 0);
+    for ft in world_tasks(world) {
         let task = ft.task();
         let Ok(Ok(resolved)) = task.resolve(&rt) else {
             continue;
         };
         let sides = PttSides::new(&rt, &task, &resolved, &classes).expect("sides");
         let planned = plan(&rt, &task).expect("plan").skills;
+        bounded += planned.stats.bounded;
         // The full grid: every (grasp, stance 1, pick skill, stance 2, place skill), J and the
         // documented tie key (J, grasp, r_pick, pick position, r_place, place position).
         let candidates = |side: &prf_runtime::skill_plan::Side<'_>, g: usize| {
@@ -249,6 +267,18 @@ fn skill_plan_equals_the_brute_force_grid() {
                 .iter()
                 .map(|&(s, k)| brute_force_risk(&rt, &sides.place, s as usize, g, k))
                 .collect();
+            // The admissible bounds are below every candidate's risk.
+            for (side, cands, risks) in [(&sides.pick, &pick, &r1), (&sides.place, &place, &r2)] {
+                for (&(s, _), r) in cands.iter().zip(risks) {
+                    if let Some(r) = r {
+                        assert!(
+                            side.bound(s as usize, g) <= *r,
+                            "{}: bound above a risk",
+                            ft.label()
+                        );
+                    }
+                }
+            }
             for (i, a) in r1.iter().enumerate() {
                 for (j, b) in r2.iter().enumerate() {
                     grid += 2;
@@ -262,7 +292,10 @@ fn skill_plan_equals_the_brute_force_grid() {
             orders.push((pick, place));
         }
         assert_eq!(planned.stats.grid_integrations, grid, "{}", ft.label());
-        let (j, g, r_pick, i, r_place, k) = best.expect("some candidate integrates");
+        let Some((j, g, r_pick, i, r_place, k)) = best else {
+            assert_eq!(planned.choice, None, "{}: no candidate reaches", ft.label());
+            continue;
+        };
         let c = planned.choice.expect("choice");
         assert_eq!(planned.j, j, "{}: J*", ft.label());
         assert_eq!(
@@ -286,17 +319,95 @@ fn skill_plan_equals_the_brute_force_grid() {
         );
         risky += (j > 0.0) as usize;
         println!(
-            "{}: J* = {:.2} mm, {} integrations against a grid of {}",
+            "{}: J* = {:.2} mm, {} integrations ({} skipped by their bound) against a grid of {}",
             ft.label(),
             j * 1e3,
             planned.stats.integrations,
+            planned.stats.bounded,
             grid
         );
     }
+    (risky, bounded)
+}
+
+#[test]
+fn skill_plan_equals_the_brute_force_grid() {
+    let world = World::example();
+    let (risky, _) = assert_plans_equal_the_grid(&world, &reduced_blob(&world));
     assert!(
         risky > 0,
         "the reduced knowledge base should make some task risky"
     );
+}
+
+/// Issue 22: with the part poses moved (2 cm and 8°: most tasks risky; 8 cm: the admissible
+/// bounds skip candidates), the bounded, reordered search still finds the grid's optimum and
+/// tie.
+#[test]
+fn skill_plan_equals_the_brute_force_grid_when_nothing_is_feasible() {
+    let bytes = reduced_blob(&World::example());
+    let (mut risky, mut bounded) = (0, 0);
+    for (dx, yaw) in [(0.02, 8.0), (0.08, 0.0)] {
+        let world = shifted_world(dx, yaw);
+        let (r, b) = assert_plans_equal_the_grid(&world, &bytes);
+        println!("shifted by {dx} m, {yaw}°: {r} risky, {b} candidates skipped by their bound");
+        (risky, bounded) = (risky + r, bounded + b);
+    }
+    assert!(
+        risky >= 10 && bounded > 0,
+        "{risky} risky, {bounded} skipped"
+    );
+}
+
+/// A planning budget: the search stops within it and brackets J* between what it knows not
+/// to be beatable and the best plan found.
+#[test]
+fn a_spent_budget_brackets_the_optimum() {
+    use prf_runtime::RuntimeConfig;
+    use prf_runtime::skill_plan::PlanBudget;
+    let bytes = reduced_blob(&World::example());
+    let world = shifted_world(0.02, 8.0);
+    let full = Runtime::load(&bytes).expect("load");
+    let mut exhausted = 0;
+    for ft in world_tasks(&world) {
+        let Ok(optimum) = plan(&full, &ft.task()) else {
+            continue;
+        };
+        let optimum = optimum.skills;
+        for steps in [2_000, 20_000] {
+            let config = RuntimeConfig {
+                plan_budget: PlanBudget { steps },
+                ..RuntimeConfig::default()
+            };
+            let rt = Runtime::load_with(&bytes, config).expect("load");
+            let p = plan(&rt, &ft.task()).expect("plan").skills;
+            assert!(
+                p.stats.steps <= steps,
+                "{}: {} steps",
+                ft.label(),
+                p.stats.steps
+            );
+            match p.exhausted {
+                Some(lower) => {
+                    exhausted += 1;
+                    assert!(
+                        lower <= optimum.j && optimum.j <= p.j,
+                        "{}: {lower} ≤ J* {} ≤ {} fails",
+                        ft.label(),
+                        optimum.j,
+                        p.j
+                    );
+                }
+                None => assert_eq!(
+                    (p.j, p.choice),
+                    (optimum.j, optimum.choice),
+                    "{}",
+                    ft.label()
+                ),
+            }
+        }
+    }
+    assert!(exhausted > 0, "some budget should run out");
 }
 
 #[test]
@@ -332,7 +443,15 @@ fn the_executor_runs_exactly_the_planned_trajectory() {
         let rdmp = rt.skill_rdmp(skill as usize).unwrap().unwrap();
         let goal = side.goal(stance as usize, c.grasp as usize).unwrap();
         let base = &side.arm_bases[stance as usize];
-        let e = evaluate_arm_motion(&rt, &rdmp, goal, &side.field, base, f64::INFINITY);
+        let e = evaluate_arm_motion(
+            &rt,
+            &rdmp,
+            goal,
+            &side.field,
+            base,
+            f64::INFINITY,
+            usize::MAX,
+        );
         let Evaluation::Risk { timing, .. } = e else {
             panic!("{e:?}")
         };

@@ -49,6 +49,8 @@ pub struct RuntimeConfig {
     pub rdmp: RdmpConfig,
     /// A task is physically feasible when J* ≤ this risk, m (Sec. 6.1; default 0).
     pub risk_threshold: f64,
+    /// The work skill planning may do per task (default: unlimited; the firmware sets one).
+    pub plan_budget: crate::skill_plan::PlanBudget,
 }
 
 impl Default for RuntimeConfig {
@@ -56,6 +58,7 @@ impl Default for RuntimeConfig {
         RuntimeConfig {
             rdmp: RdmpConfig::default(),
             risk_threshold: 0.0,
+            plan_budget: crate::skill_plan::PlanBudget::UNLIMITED,
         }
     }
 }

@@ -3,7 +3,7 @@
 
 use crate::load::{LoadError, Runtime};
 use crate::program::{Program, ProgramError, Realization};
-use crate::skill_plan::{PttClasses, PttSides, SkillPlan, SkillPlanError, plan_skills};
+use crate::skill_plan::{PttClasses, PttSides, SkillPlan, SkillPlanError, plan_skills_within};
 use crate::task::{MissingList, Resolved, Task, TaskError};
 use crate::task_plan::{ActionPlan, plan_actions};
 use prf_shared::motion::Goal;
@@ -92,7 +92,7 @@ pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>
         return Err(PlanError::Skill(SkillPlanError::UnsupportedPlan));
     }
     let sides = PttSides::new(rt, task, &resolved, &classes)?;
-    let skills = plan_skills(rt, &sides)?;
+    let skills = plan_skills_within(rt, &sides, rt.config.plan_budget)?;
     let (mut program, mut stances) = (None, None);
     if let (Some(c), Some((t1, t2))) = (skills.choice, skills.timing) {
         let (s1, s2, g) = (

@@ -8,6 +8,22 @@
 //!   best J of an earlier grasp (risk only grows along a trajectory, so it cannot win);
 //! - a side stops at risk 0, and the search stops at J = 0.
 //!
+//! **Admissible bounds** ([`Side::bound`]) skip integrations that cannot win. The stream of a
+//! candidate starts at q_a,H and ends with its TCP within [`REACH_POSITION`] and
+//! [`REACH_ANGLE`] of its goal (a candidate that ends farther away did not reach it and is
+//! refused, [`Evaluation::Missed`]). So, before integrating, its risk is at least that of
+//! q_a,H at its stance, and at least that of the spheres rigid with the TCP (link 7 and the
+//! tool) anywhere within the reach tolerance of the goal pose
+//! ([`Field::distance_lower_within`]). A candidate whose bound reaches the limit it would
+//! have to beat is skipped exactly as a pruned one (it cannot win, and ties go to earlier
+//! candidates), and so is a grasp whose two sides' smallest bounds reach the best J so far:
+//! the optimum and the tie order stay the brute-force grid's.
+//!
+//! **Budget.** With [`PlanBudget`] the search stops once the RDMP steps spent (failed
+//! integrations included) reach the budget, within an integration if need be, and says what it
+//! knows: the best plan found (an upper bound of J*) and the smallest bound of what was not
+//! searched (a lower bound of J*).
+//!
 //! **Order and ties.** Candidates of a side for a grasp are ordered stance-major (blob order
 //! of the stances); within a stance, skills learned at this location type come first, then
 //! the others, each group by the distance of the skill's demonstrated TCP goal to the
@@ -25,14 +41,16 @@ use crate::load::{LoadError, Runtime};
 use crate::task::{Resolved, Task};
 use crate::task_plan::{Action, ActionPlan, FROM, HOME, TO};
 use prf_shared::field::Field;
+use prf_shared::kinematics::ArmKinematics;
 use prf_shared::limits::LimitRatios;
 use prf_shared::motion::{Goal, GoalContext, MotionClass, PhysicalState};
 use prf_shared::rdmp::{Rdmp, RdmpError, RdmpRun};
-use prf_shared::risk::RiskAccumulator;
+use prf_shared::risk::{RiskAccumulator, eta};
+use prf_shared::robot::LINK_TOOL;
 use prf_shared::se3::{Pose, pose_from_array};
 pub use prf_shared::timing::{ArmTiming, MAX_TIME_SCALE};
 use prf_shared::timing::{TimingError, pace_observed};
-use prf_shared::{JointVector, blob::MAX_AFFORDANCES};
+use prf_shared::{JointVector, NA, blob::MAX_AFFORDANCES};
 
 /// The classes a part-transportation plan uses.
 pub const PTT_CLASSES: [&str; 3] = ["Pick", "Place", "Move"];
@@ -42,6 +60,10 @@ pub const MAX_SKILLS: usize = 256;
 pub const ROTATION_WEIGHT: f64 = 0.1;
 /// Maximum (stance, grasp) goals of one side.
 pub const MAX_GOALS: usize = 64;
+/// A candidate reaches its goal when its final TCP is this close to the goal position, m.
+pub const REACH_POSITION: f64 = 1e-3;
+/// ... and this close to the goal orientation, rad.
+pub const REACH_ANGLE: f64 = 5e-3;
 
 /// The decision variables of SkillPlan-PTT: indices of stance at ℓ1, stance at ℓ2 and grasp
 /// in the blob's affordance lists, and the blob indices of the pick and place skills.
@@ -70,6 +92,10 @@ pub struct PlanStats {
     pub failed: u32,
     /// ... of which exceeded a joint limit even at [`MAX_TIME_SCALE`].
     pub too_fast: u32,
+    /// ... of which ended too far from their goal ([`Evaluation::Missed`]).
+    pub missed: u32,
+    /// Candidates not integrated because their admissible bound could not win.
+    pub bounded: u32,
     /// Integration steps taken in total.
     pub steps: u64,
     /// Integrations the paper's full grid would run (2 per grid point).
@@ -93,6 +119,21 @@ pub struct SkillPlan {
     pub feasible: bool,
     /// The work done.
     pub stats: PlanStats,
+    /// The budget ran out before the search ended: J* is at least this (m) and at most `j`.
+    pub exhausted: Option<f64>,
+}
+
+/// How much work one task's skill planning may do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PlanBudget {
+    /// RDMP integration steps, all candidates and time scales together, steps of failed
+    /// integrations included; no integration continues past it.
+    pub steps: u64,
+}
+
+impl PlanBudget {
+    /// No limit.
+    pub const UNLIMITED: PlanBudget = PlanBudget { steps: u64::MAX };
 }
 
 /// What an arm motion candidate came to.
@@ -113,14 +154,50 @@ pub enum Evaluation {
         steps: usize,
     },
     /// The RDMP could not be integrated.
-    Failed(RdmpError),
+    Failed {
+        /// Why.
+        error: RdmpError,
+        /// Integration steps taken (all time scales tried).
+        steps: usize,
+    },
+    /// The stream ended with its TCP farther from the goal than [`REACH_POSITION`] or
+    /// [`REACH_ANGLE`]: it does not reach the goal.
+    Missed {
+        /// Final TCP position error, m.
+        position: f64,
+        /// Final TCP orientation error, rad.
+        angle: f64,
+        /// Integration steps taken (all time scales tried).
+        steps: usize,
+    },
     /// Even at [`MAX_TIME_SCALE`] the stream would exceed a joint limit.
     TooFast {
         /// The last time scale tried.
         scale: f64,
         /// The ratios it reached (a run stops early once no scale up to the bound can help).
         ratios: LimitRatios,
+        /// Integration steps taken (all time scales tried).
+        steps: usize,
     },
+    /// The step cap ran out first: nothing is known about the candidate.
+    Capped {
+        /// Integration steps taken (all of the cap).
+        steps: usize,
+    },
+}
+
+impl Evaluation {
+    /// Integration steps the evaluation took.
+    pub fn steps(&self) -> usize {
+        match *self {
+            Evaluation::Risk { steps, .. }
+            | Evaluation::Pruned { steps }
+            | Evaluation::Failed { steps, .. }
+            | Evaluation::Missed { steps, .. }
+            | Evaluation::TooFast { steps, .. }
+            | Evaluation::Capped { steps } => steps,
+        }
+    }
 }
 
 /// Why planning stopped with an error.
@@ -176,7 +253,8 @@ impl From<prf_shared::blob::BlobError> for SkillPlanError {
 /// ([`prf_shared::timing::pace_observed`]), and takes the risk in `field` (arm base at
 /// `arm_base`, field frame) of exactly that stream. [`Evaluation::Pruned`] once the running
 /// risk of the final stream reaches `bound` (∞: never): the timing is settled first, so a
-/// pruned candidate is one the full evaluation would also rate at ≥ `bound`.
+/// pruned candidate is one the full evaluation would also rate at ≥ `bound`. At most `cap`
+/// integration steps ([`Evaluation::Capped`]).
 pub fn evaluate_arm_motion(
     rt: &Runtime<'_>,
     rdmp: &Rdmp,
@@ -184,6 +262,7 @@ pub fn evaluate_arm_motion(
     field: &Field<'_>,
     arm_base: &Pose,
     bound: f64,
+    cap: usize,
 ) -> Evaluation {
     if !(bound > 0.0) {
         // Risk is never negative: nothing reaches below 0, whatever its timing.
@@ -199,23 +278,39 @@ pub fn evaluate_arm_motion(
         rdmp,
         &q0,
         goal,
-        || (RiskAccumulator::default(), true),
-        |(acc, below), kin| {
+        cap,
+        || (RiskAccumulator::default(), true, Pose::identity()),
+        |(acc, below, last), kin| {
+            *last = kin.tcp;
             if *below && acc.add(model, field, arm_base, kin) >= bound {
                 *below = false;
             }
         },
     );
-    let ((acc, below), steps) = (paced.observer, paced.steps);
+    let ((acc, below, last), steps) = (paced.observer, paced.steps);
+    let (position, angle) = (
+        (last.translation.vector - goal.translation.vector).norm(),
+        last.rotation.angle_to(&goal.rotation),
+    );
     match paced.timing {
+        Ok(_) if !(position <= REACH_POSITION && angle <= REACH_ANGLE) => Evaluation::Missed {
+            position,
+            angle,
+            steps,
+        },
         Ok(timing) if below => Evaluation::Risk {
             risk: acc.risk(),
             timing,
             steps,
         },
         Ok(_) => Evaluation::Pruned { steps },
-        Err(TimingError::Rdmp(e)) => Evaluation::Failed(e),
-        Err(TimingError::TooFast { scale, ratios }) => Evaluation::TooFast { scale, ratios },
+        Err(TimingError::Rdmp(error)) => Evaluation::Failed { error, steps },
+        Err(TimingError::TooFast { scale, ratios }) => Evaluation::TooFast {
+            scale,
+            ratios,
+            steps,
+        },
+        Err(TimingError::Capped) => Evaluation::Capped { steps },
     }
 }
 
@@ -240,6 +335,39 @@ pub fn trace_arm_motion(
     Ok(())
 }
 
+/// A lower bound of the risk of any stream that ends with its TCP within [`REACH_POSITION`]
+/// and [`REACH_ANGLE`] of `goal` (arm base frame; arm base at `arm_base` in the field's
+/// frame): the spheres rigid with the TCP (link 7 and the tool) end within
+/// REACH_POSITION + REACH_ANGLE · (their distance from the TCP) of where they are at the goal,
+/// and the field is bounded below over that ball.
+pub fn goal_bound(
+    model: &prf_shared::robot::RobotModel,
+    field: &Field<'_>,
+    arm_base: &Pose,
+    goal: &Pose,
+) -> f64 {
+    let tool = goal * model.tcp.inverse();
+    let link7 = tool * model.flange.inverse();
+    let mut excess = f64::NEG_INFINITY;
+    for sphere in &model.spheres {
+        let frame = match sphere.link as usize {
+            LINK_TOOL => &tool,
+            l if l == NA => &link7,
+            _ => continue,
+        };
+        let c = frame.transform_point(&sphere.centre.into());
+        let lever = (c.coords - goal.translation.vector).norm();
+        let delta = REACH_POSITION + REACH_ANGLE * lever;
+        let d = field.distance_lower_within(&arm_base.transform_point(&c).coords, delta);
+        // NaN (a non-finite goal): no bound.
+        if d.is_nan() {
+            return 0.0;
+        }
+        excess = excess.max(d + sphere.radius);
+    }
+    eta(excess)
+}
+
 /// One side of the search (Pick at ℓ1 or Place at ℓ2): its workspace, the arm base of each
 /// stance in the location frame, the arm-base-frame goal of each (stance, grasp), and the
 /// ordered skills.
@@ -256,6 +384,8 @@ pub struct Side<'a> {
     pub platform: heapless::Vec<Pose, MAX_AFFORDANCES>,
     /// The class's skills with an RDMP: (skill, RDMP, learned at this location type).
     pub skills: heapless::Vec<(u16, u16, bool), MAX_SKILLS>,
+    /// Admissible bound of (stance s, grasp g) at s · grasps + g (see [`Side::bound`]).
+    pub bounds: heapless::Vec<f64, MAX_GOALS>,
 }
 
 impl<'a> Side<'a> {
@@ -275,6 +405,7 @@ impl<'a> Side<'a> {
             grasps,
             platform: heapless::Vec::new(),
             skills,
+            bounds: heapless::Vec::new(),
         })
     }
 
@@ -297,6 +428,38 @@ impl<'a> Side<'a> {
                 .map_err(|_| SkillPlanError::TooManyAffordances)?;
         }
         Ok(())
+    }
+
+    /// A lower bound of the risk of every candidate of stance `s` and grasp `g`, known without
+    /// integrating (see the module): 0 where none is known.
+    pub fn bound(&self, s: usize, g: usize) -> f64 {
+        self.bounds
+            .get(s * self.grasps + g)
+            .filter(|_| g < self.grasps)
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    /// The smallest bound of grasp `g` over the stances: a lower bound of the side's minimum.
+    pub fn grasp_bound(&self, g: usize) -> f64 {
+        (0..self.arm_bases.len())
+            .map(|s| self.bound(s, g))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Computes [`Side::bound`] for every (stance, grasp) once the goals are known.
+    fn compute_bounds(&mut self, model: &prf_shared::robot::RobotModel) {
+        let q0 = ArmKinematics::new(model, &JointVector::from(model.home));
+        self.bounds.clear();
+        for (s, base) in self.arm_bases.iter().enumerate() {
+            let start = RiskAccumulator::default().add(model, &self.field, base, &q0);
+            for g in 0..self.grasps {
+                let goal = self.goals[s * self.grasps + g];
+                let end = goal_bound(model, &self.field, base, &goal);
+                // Capacity: one bound per goal.
+                let _ = self.bounds.push(start.max(end));
+            }
+        }
     }
 
     /// The goal of stance `s` and grasp `g`.
@@ -510,6 +673,8 @@ impl<'a> PttSides<'a> {
             });
         }
         result?;
+        pick.compute_bounds(model);
+        place.compute_bounds(model);
         Ok(PttSides {
             pick,
             place,
@@ -522,18 +687,30 @@ impl<'a> PttSides<'a> {
 type Best = Option<(f64, u8, u16, ArmTiming)>;
 
 /// min over the side's candidates of r for grasp `grasp`, counting only candidates with
-/// r < `bound`; the first candidate in order wins ties.
+/// r < `bound`; the first candidate in order wins ties. Candidates whose [`Side::bound`]
+/// reaches the limit are not integrated. Stops when `stats.steps` reaches `budget` (before or
+/// within an integration); the flag says it did.
 fn side_minimum(
     rt: &Runtime<'_>,
     side: &Side<'_>,
     grasp: usize,
     bound: f64,
+    budget: u64,
     stats: &mut PlanStats,
-) -> Result<Best, SkillPlanError> {
+) -> Result<(Best, bool), SkillPlanError> {
     let mut best: Best = None;
+    let mut exhausted = false;
     let mut result = Ok(());
     side.candidates(rt, grasp, |s, k| {
         let limit = best.map_or(bound, |b| b.0.min(bound));
+        if side.bound(s as usize, grasp) >= limit {
+            stats.bounded += 1;
+            return true;
+        }
+        if stats.steps >= budget {
+            exhausted = true;
+            return false;
+        }
         let (Some(goal), Ok(Some(rdmp))) =
             (side.goal(s as usize, grasp), rt.skill_rdmp(k as usize))
         else {
@@ -542,13 +719,11 @@ fn side_minimum(
         };
         let arm_base = &side.arm_bases[s as usize];
         stats.integrations += 1;
-        match evaluate_arm_motion(rt, &rdmp, goal, &side.field, arm_base, limit) {
-            Evaluation::Risk {
-                risk,
-                timing,
-                steps,
-            } => {
-                stats.steps += steps as u64;
+        let cap = (budget - stats.steps).min(usize::MAX as u64) as usize;
+        let e = evaluate_arm_motion(rt, &rdmp, goal, &side.field, arm_base, limit, cap);
+        stats.steps += e.steps() as u64;
+        match e {
+            Evaluation::Risk { risk, timing, .. } => {
                 if risk < limit {
                     best = Some((risk, s, k, timing));
                     if risk <= 0.0 {
@@ -556,21 +731,34 @@ fn side_minimum(
                     }
                 }
             }
-            Evaluation::Pruned { steps } => {
-                stats.pruned += 1;
-                stats.steps += steps as u64;
-            }
-            Evaluation::Failed(_) => stats.failed += 1,
+            Evaluation::Pruned { .. } => stats.pruned += 1,
+            Evaluation::Failed { .. } => stats.failed += 1,
             Evaluation::TooFast { .. } => stats.too_fast += 1,
+            Evaluation::Missed { .. } => stats.missed += 1,
+            Evaluation::Capped { .. } => {
+                exhausted = true;
+                return false;
+            }
         }
         true
     })?;
     result?;
-    Ok(best)
+    Ok((best, exhausted))
 }
 
-/// SkillPlan-PTT (Alg. 4) over the two sides: the decomposed, pruned grid search.
+/// SkillPlan-PTT (Alg. 4) over the two sides: the decomposed, pruned grid search, without a
+/// budget.
 pub fn plan_skills(rt: &Runtime<'_>, sides: &PttSides<'_>) -> Result<SkillPlan, SkillPlanError> {
+    plan_skills_within(rt, sides, PlanBudget::UNLIMITED)
+}
+
+/// SkillPlan-PTT within `budget`: the optimum of the brute-force grid when the budget lasts;
+/// otherwise the best plan found and a lower bound of J* ([`SkillPlan::exhausted`]).
+pub fn plan_skills_within(
+    rt: &Runtime<'_>,
+    sides: &PttSides<'_>,
+    budget: PlanBudget,
+) -> Result<SkillPlan, SkillPlanError> {
     let (pick, place) = (&sides.pick, &sides.place);
     let mut stats = PlanStats {
         grid_integrations: 2
@@ -578,30 +766,60 @@ pub fn plan_skills(rt: &Runtime<'_>, sides: &PttSides<'_>) -> Result<SkillPlan, 
             * (pick.skills.len() * place.skills.len()) as u64,
         ..PlanStats::default()
     };
+    // J of each grasp is at least the larger of its sides' smallest bounds.
+    let grasp_bound = |g: usize| pick.grasp_bound(g).max(place.grasp_bound(g));
+    // Grasps by bound (then index): the most promising first. The tie order is kept by the
+    // bound each grasp must beat: the best J so far, or just above it for a grasp of smaller
+    // index (which wins a tie).
+    let mut order: heapless::Vec<(f64, usize), MAX_AFFORDANCES> = heapless::Vec::new();
+    for g in 0..sides.grasps.min(MAX_AFFORDANCES) {
+        let _ = order.push((grasp_bound(g), g));
+    }
+    order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     // (J, choice, r_pick, r_place, timings) of the best plan so far.
     type Plan = (f64, Choice, f64, f64, (ArmTiming, ArmTiming));
     let mut best: Option<Plan> = None;
-    for g in 0..sides.grasps {
-        let bound = best.map_or(f64::INFINITY, |b| b.0);
-        let Some((r_pick, s1, k1, t1)) = side_minimum(rt, pick, g, bound, &mut stats)? else {
-            continue;
-        };
-        let Some((r_place, s2, k2, t2)) = side_minimum(rt, place, g, bound, &mut stats)? else {
-            continue;
-        };
-        let j = r_pick.max(r_place);
-        if j < bound {
-            let choice = Choice {
-                stance_from: s1,
-                stance_to: s2,
-                grasp: g as u8,
-                pick_skill: k1,
-                place_skill: k2,
-            };
-            best = Some((j, choice, r_pick, r_place, (t1, t2)));
-            if j <= 0.0 {
-                break;
+    let mut exhausted = None;
+    for (i, &(lower, g)) in order.iter().enumerate() {
+        let bound = best.map_or(f64::INFINITY, |b| {
+            if g < b.1.grasp as usize {
+                b.0.next_up()
+            } else {
+                b.0
             }
+        });
+        if lower >= bound {
+            stats.bounded += (pick.arm_bases.len() * pick.skills.len()
+                + place.arm_bases.len() * place.skills.len()) as u32;
+            continue;
+        }
+        let (first, out) = side_minimum(rt, pick, g, bound, budget.steps, &mut stats)?;
+        let second = match (first, out) {
+            (Some(_), false) => side_minimum(rt, place, g, bound, budget.steps, &mut stats)?,
+            _ => (None, out),
+        };
+        if second.1 {
+            // Out of budget in this grasp: it and the grasps after it were not searched to
+            // the end (their bounds are sorted, so this one's is the smallest).
+            exhausted = Some(lower.min(best.map_or(f64::INFINITY, |b| b.0)));
+            break;
+        }
+        let (Some((r_pick, s1, k1, t1)), Some((r_place, s2, k2, t2))) = (first, second.0) else {
+            continue;
+        };
+        // Both sides are below `bound`, so this plan beats the best so far.
+        let j = r_pick.max(r_place);
+        let choice = Choice {
+            stance_from: s1,
+            stance_to: s2,
+            grasp: g as u8,
+            pick_skill: k1,
+            place_skill: k2,
+        };
+        best = Some((j, choice, r_pick, r_place, (t1, t2)));
+        // J = 0 cannot be beaten, except by a grasp of smaller index not searched yet.
+        if j <= 0.0 && order[i + 1..].iter().all(|&(_, h)| h > g) {
+            break;
         }
     }
     let (j, choice, r_pick, r_place, timing) = match best {
@@ -616,5 +834,6 @@ pub fn plan_skills(rt: &Runtime<'_>, sides: &PttSides<'_>) -> Result<SkillPlan, 
         timing,
         feasible: j <= rt.config.risk_threshold,
         stats,
+        exhausted,
     })
 }

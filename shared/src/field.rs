@@ -380,6 +380,29 @@ impl<'a> Field<'a> {
         best
     }
 
+    /// A lower bound of the field's value anywhere within `delta` of `p` (location frame): the
+    /// smallest lookup term, at `p`, of every cell the lookup of such a point can use, less
+    /// `delta` (every term is 1-Lipschitz; outside the grid box the lookup adds the distance to
+    /// the box, and clamping to the box moves no point farther). NaN input gives NaN.
+    pub fn distance_lower_within(&self, p: &Vector3<f64>, delta: f64) -> f64 {
+        let q = p.sup(&self.origin).inf(&self.top);
+        if !(q.iter().all(|v| v.is_finite()) && delta >= 0.0) {
+            return f64::NAN;
+        }
+        let d = Vector3::repeat(delta);
+        let lo = self.cell_of(&((q - d - self.origin) * self.inv_h));
+        let hi = self.cell_of(&((q + d - self.origin) * self.inv_h));
+        let mut best = f64::INFINITY;
+        for i in lo[0]..=hi[0] {
+            for j in lo[1]..=hi[1] {
+                for k in lo[2]..=hi[2] {
+                    best = best.min(self.distance_in_cell([i, j, k], p));
+                }
+            }
+        }
+        best - delta
+    }
+
     /// Linear index of cell (i, j, k).
     pub fn cell_index(&self, c: [usize; 3]) -> u32 {
         ((c[0] * (self.dims[1] - 1) + c[1]) * (self.dims[2] - 1) + c[2]) as u32

@@ -47,8 +47,15 @@ pub enum Run {
         /// Peak ratios reached.
         ratios: LimitRatios,
     },
-    /// The RDMP could not be integrated.
-    Failed(RdmpError),
+    /// The RDMP could not be integrated after `steps` steps.
+    Failed {
+        /// Why.
+        error: RdmpError,
+        /// Steps taken.
+        steps: usize,
+    },
+    /// The step cap was reached before the run ended.
+    Capped,
 }
 
 /// Integrates `rdmp` (already time-scaled by `scale`) from `q0` to `goal` (arm base frame),
@@ -63,20 +70,24 @@ pub fn run_at(
     q0: &JointVector,
     goal: &Pose,
     scale: f64,
+    cap: usize,
     mut observe: impl FnMut(&ArmKinematics),
 ) -> Run {
     let mut run = match RdmpRun::new(model, rdmp, q0, goal, cfg) {
         Ok(r) => r,
-        Err(e) => return Run::Failed(e),
+        Err(error) => return Run::Failed { error, steps: 0 },
     };
     let nominal = run.progress().1;
     let mut meter = ArmMeter::at_rest(limits, cfg.dt, &(*q0).into());
     let mut steps = 0;
     // Each step shows the FK of the configuration it leaves: q_0 … q_{n−1}; q_n comes last.
     loop {
+        if steps >= cap {
+            return Run::Capped;
+        }
         let q = match run.step_observed(model, rdmp, cfg, &mut observe) {
             Ok(s) => s.q,
-            Err(e) => return Run::Failed(e),
+            Err(error) => return Run::Failed { error, steps },
         };
         steps += 1;
         meter.push(&q.into());
@@ -142,6 +153,8 @@ pub enum TimingError {
     },
     /// The RDMP could not be integrated.
     Rdmp(RdmpError),
+    /// The step cap ran out before the timing was settled.
+    Capped,
 }
 
 impl core::fmt::Display for TimingError {
@@ -152,6 +165,9 @@ impl core::fmt::Display for TimingError {
                 "the motion exceeds a joint limit even slowed down to τ × {scale:.2} ({ratios})"
             ),
             TimingError::Rdmp(e) => write!(f, "{e}"),
+            TimingError::Capped => {
+                write!(f, "the step budget ran out before the timing was settled")
+            }
         }
     }
 }
@@ -172,7 +188,8 @@ pub struct Paced<O> {
 
 /// The smallest time scale on the ladder 1, [`next_scale`], … at which `rdmp` from `q0` to
 /// `goal` stays within `limits`, with its timing. Each run gets a `fresh()` observer that
-/// `observe` shows every configuration's kinematics.
+/// `observe` shows every configuration's kinematics. At most `cap` steps in all runs
+/// together ([`TimingError::Capped`] when they run out).
 #[allow(clippy::too_many_arguments)]
 pub fn pace_observed<O>(
     model: &RobotModel,
@@ -181,6 +198,7 @@ pub fn pace_observed<O>(
     rdmp: &Rdmp,
     q0: &JointVector,
     goal: &Pose,
+    cap: usize,
     mut fresh: impl FnMut() -> O,
     mut observe: impl FnMut(&mut O, &ArmKinematics),
 ) -> Paced<O> {
@@ -190,7 +208,8 @@ pub fn pace_observed<O>(
     loop {
         let mut observer = fresh();
         let scaled = rdmp.time_scaled(scale);
-        let run = run_at(model, limits, cfg, &scaled, q0, goal, scale, |k| {
+        let left = cap.saturating_sub(steps);
+        let run = run_at(model, limits, cfg, &scaled, q0, goal, scale, left, |k| {
             observe(&mut observer, k)
         });
         trials += 1;
@@ -199,7 +218,14 @@ pub fn pace_observed<O>(
                 steps += t.steps as usize;
                 Ok(t)
             }
-            Run::Failed(e) => Err(TimingError::Rdmp(e)),
+            Run::Failed { error, steps: n } => {
+                steps += n;
+                Err(TimingError::Rdmp(error))
+            }
+            Run::Capped => {
+                steps += left;
+                Err(TimingError::Capped)
+            }
             Run::TooFast { steps: n, ratios } => {
                 steps += n;
                 match next_scale(scale, &ratios) {
@@ -228,5 +254,16 @@ pub fn pace(
     q0: &JointVector,
     goal: &Pose,
 ) -> Result<ArmTiming, TimingError> {
-    pace_observed(model, limits, cfg, rdmp, q0, goal, || (), |_, _| {}).timing
+    pace_observed(
+        model,
+        limits,
+        cfg,
+        rdmp,
+        q0,
+        goal,
+        usize::MAX,
+        || (),
+        |_, _| {},
+    )
+    .timing
 }

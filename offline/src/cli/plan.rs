@@ -7,7 +7,7 @@ use prf_files::dataset::trajectory_csv;
 use prf_runtime::executor::planar;
 use prf_runtime::plan::{Plan, PlanError, plan};
 use prf_runtime::program::Program;
-use prf_runtime::skill_plan::MAX_TIME_SCALE;
+use prf_runtime::skill_plan::{MAX_TIME_SCALE, PlanBudget};
 use prf_runtime::{Runtime, RuntimeConfig};
 use prf_shared::motion::Param;
 use prf_sim::navigation::{PartTracker, drive_phases, execute_navigating, part_size};
@@ -45,6 +45,10 @@ pub struct Args {
     /// a risk-0 plan guarantees).
     #[arg(long)]
     pub clearance: Option<f64>,
+    /// Planning budget per task, RDMP integration steps (default: unlimited). When it runs
+    /// out the answer is the best plan found and a lower bound of J*.
+    #[arg(long)]
+    pub budget_steps: Option<u64>,
 }
 
 /// What a risk-0 plan on this blob guarantees (Sec. 4.1): every sphere inside Ω+ is within
@@ -75,6 +79,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let config = RuntimeConfig {
         risk_threshold: a.threshold,
+        plan_budget: a
+            .budget_steps
+            .map_or(PlanBudget::UNLIMITED, |steps| PlanBudget { steps }),
         ..RuntimeConfig::default()
     };
     let rt = runtime(&bytes, &a.blob, config)?;
@@ -251,6 +258,15 @@ fn print_plan(rt: &Runtime<'_>, ft: &FloorTask, p: &Plan, took: f64) -> anyhow::
         mm(s.r_place),
         mm(rt.config.risk_threshold)
     );
+    if let Some(lower) = s.exhausted {
+        println!(
+            "  risky: J* ≥ {} after {} integrations: the planning budget of {} steps ran out (the plan below is the best found, J = {})",
+            mm(lower),
+            s.stats.integrations,
+            rt.config.plan_budget.steps,
+            mm(s.j)
+        );
+    }
     if let (Some(c), Some((p1, p2))) = (s.choice, p.stances) {
         println!("  at {}: {}", ft.from.0, stance(c.stance_from, &p1));
         println!("  at {}: {}", ft.to.0, stance(c.stance_to, &p2));
@@ -276,11 +292,13 @@ fn print_plan(rt: &Runtime<'_>, ft: &FloorTask, p: &Plan, took: f64) -> anyhow::
     }
     let st = &s.stats;
     println!(
-        "  work: {} RDMP integrations ({} pruned, {} failed, {} too fast), {} steps, {:.1} ms; the paper's grid: {} integrations ({:.0}× more)",
+        "  work: {} RDMP integrations ({} pruned, {} failed, {} too fast, {} missed their goal), {} skipped by their bound, {} steps, {:.1} ms; the paper's grid: {} integrations ({:.0}× more)",
         st.integrations,
         st.pruned,
         st.failed,
         st.too_fast,
+        st.missed,
+        st.bounded,
         st.steps,
         took * 1e3,
         st.grid_integrations,
@@ -316,6 +334,7 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
         "ms"
     );
     let (mut total_ms, mut integrations, mut grid, mut feasible) = (0.0, 0u64, 0u64, 0);
+    let mut bounded = 0u64;
     for (i, ft) in tasks.iter().enumerate() {
         let t0 = Instant::now();
         let result = plan(rt, &ft.task());
@@ -325,6 +344,7 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
             Ok(p) => {
                 let s = &p.skills;
                 integrations += s.stats.integrations as u64;
+                bounded += s.stats.bounded as u64;
                 grid += s.stats.grid_integrations;
                 feasible += s.feasible as usize;
                 let c = s.choice;
@@ -339,7 +359,8 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
                     i,
                     ft.label(),
                     if s.feasible { "feasible" } else { "risky" },
-                    mm(s.j),
+                    s.exhausted
+                        .map_or_else(|| mm(s.j), |l| format!("≥{}", mm(l))),
                     f(c.map(|c| c.stance_from.to_string())),
                     f(c.map(|c| c.stance_to.to_string())),
                     f(c.map(|c| c.grasp.to_string())),
@@ -359,7 +380,7 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
         }
     }
     println!(
-        "{feasible}/{} physically feasible; planning {:.1} ms in total; {} RDMP integrations against the paper's grid of {} ({:.0}× fewer)",
+        "{feasible}/{} physically feasible; planning {:.1} ms in total; {} RDMP integrations ({bounded} candidates skipped by their bound) against the paper's grid of {} ({:.0}× fewer)",
         tasks.len(),
         total_ms,
         integrations,

@@ -11,3 +11,9 @@ pub const TICK_HZ: u32 = 1_000;
 /// Where the blob and the task block are flashed (`memory.x` BLOB and TASK), for messages.
 pub const BLOB_ADDRESS: u32 = 0x0030_0000;
 pub const TASK_ADDRESS: u32 = 0x003F_0000;
+
+/// Planning budget per task, RDMP integration steps (all candidates together, failed ones
+/// included). At about 23,400 instructions per step (planning, risk and pacing together) an
+/// infeasible task stops within the firmware's planning bound of 300 M instructions; the
+/// example cell's feasible tasks need 6,000–7,600 steps.
+pub const PLAN_BUDGET_STEPS: u64 = 11_000;

@@ -18,6 +18,9 @@ pub enum Exit {
     NotDone = 7,
     /// The setpoint stream could not be written to the host.
     Output = 8,
+    /// The task cannot be done safely: J* above the risk threshold (or the planning budget ran
+    /// out with no plan below it). Nothing is executed.
+    Risky = 9,
     Exception = 101,
     Panic = 103,
 }

@@ -25,7 +25,7 @@ mod semihost;
 mod time_driver;
 
 use block_on::block_on;
-use board::{BLOB_ADDRESS, TASK_ADDRESS, TICK_HZ};
+use board::{BLOB_ADDRESS, PLAN_BUDGET_STEPS, TASK_ADDRESS, TICK_HZ};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use embassy_time::{Duration, Instant};
@@ -37,8 +37,9 @@ use prf_runtime::figures::{self, Figures, ModeFigures};
 use prf_runtime::ideal::IdealCell;
 use prf_runtime::program::Program;
 use prf_runtime::reverse::Reversal;
+use prf_runtime::skill_plan::PlanBudget;
 use prf_runtime::stream::{self, RECORD_LEN};
-use prf_runtime::{Runtime, Task, plan};
+use prf_runtime::{Runtime, RuntimeConfig, Task, plan};
 use prf_shared::blob::{Blob, CRC32};
 use semihost::HostFile;
 use time_driver::{COUNTS_PER_PERIOD, counts};
@@ -72,15 +73,17 @@ fn main() -> ! {
         cortex_m::asm::udf();
     }
     let mut figures = Figures::default();
-    let (rt, task, program) = load_and_plan(k, &mut figures);
-    let status = execute(
-        &rt,
-        &task,
-        program,
-        k,
-        semihost::option(cmdline, "stream"),
-        &mut figures,
-    );
+    let status = match load_and_plan(k, &mut figures) {
+        Ok((rt, task, program)) => execute(
+            &rt,
+            &task,
+            program,
+            k,
+            semihost::option(cmdline, "stream"),
+            &mut figures,
+        ),
+        Err(status) => status,
+    };
     let (data, bss) = measure::static_ram();
     let stack = stack.high_water_mark();
     (figures.ram_data, figures.ram_bss) = (data as u64, bss as u64);
@@ -111,9 +114,13 @@ fn write_figures(path: &str, figures: &Figures) -> bool {
     written
 }
 
-/// Loads the blob and the task block from flash and plans the task; exits on any error.
+/// Loads the blob and the task block from flash and plans the task; exits on any error, and
+/// returns [`Exit::Risky`] for a task it cannot do safely (after its figures are taken).
 #[inline(never)]
-fn load_and_plan(k: u64, figures: &mut Figures) -> (Runtime<'static>, Task<'static>, Program) {
+fn load_and_plan(
+    k: u64,
+    figures: &mut Figures,
+) -> Result<(Runtime<'static>, Task<'static>, Program), Exit> {
     let blob = region(&raw const _blob_start, &raw const _blob_end);
     let Some(bytes) = Blob::stored_len(blob).ok().and_then(|n| blob.get(..n)) else {
         hprintln!(
@@ -124,7 +131,13 @@ fn load_and_plan(k: u64, figures: &mut Figures) -> (Runtime<'static>, Task<'stat
         exit(Exit::NoBlob);
     };
     let t0 = counts();
-    let rt = match Runtime::load(bytes) {
+    let config = RuntimeConfig {
+        plan_budget: PlanBudget {
+            steps: PLAN_BUDGET_STEPS,
+        },
+        ..RuntimeConfig::default()
+    };
+    let rt = match Runtime::load_with(bytes, config) {
         Ok(rt) => rt,
         Err(e) => {
             hprintln!(
@@ -165,21 +178,40 @@ fn load_and_plan(k: u64, figures: &mut Figures) -> (Runtime<'static>, Task<'stat
             exit(Exit::Plan);
         }
     };
-    figures.feasible = p.skills.feasible;
-    figures.integrations = p.skills.stats.integrations as u64;
+    let s = &p.skills;
+    figures.feasible = s.feasible;
+    figures.integrations = s.stats.integrations as u64;
     figures.planning_instructions = (counts() - t1) * k;
     hprintln!(
-        "plan J* {:.6e} feasible {} integrations {} instructions {}",
-        p.skills.j,
+        "plan J* {:.6e} feasible {} integrations {} steps {} instructions {}",
+        s.j,
         figures.feasible,
         figures.integrations,
+        s.stats.steps,
         figures.planning_instructions
     );
+    if !s.feasible {
+        match s.exhausted {
+            Some(lower) => hprintln!(
+                "prf-firmware: risky: J* ≥ {:.1} mm after {} integrations (the planning budget of {} steps is spent; best plan found: J = {:.1} mm, inf if none); nothing executed",
+                lower * 1e3,
+                s.stats.integrations,
+                PLAN_BUDGET_STEPS,
+                s.j * 1e3
+            ),
+            None => hprintln!(
+                "prf-firmware: risky: J* = {:.1} mm after {} integrations; nothing executed",
+                s.j * 1e3,
+                s.stats.integrations
+            ),
+        }
+        return Err(Exit::Risky);
+    }
     let Some(program) = p.program else {
         hprintln!("prf-firmware: the task has no program");
         exit(Exit::NoProgram);
     };
-    (rt, task, program)
+    Ok((rt, task, program))
 }
 
 /// Setpoint records buffered before a write to the host.
