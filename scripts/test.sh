@@ -63,6 +63,10 @@ cargo run --locked -q -p prf-offline --bin prf -- plan "$smoke/cell.blob" --all 
 cargo run --locked -q -p prf-offline --bin prf -- plan "$smoke/cell.blob" --part Part1 --from CNC1 \
   --to Table1 --export "$smoke/program.csv" | tail -n 1
 
+step "CLI smoke run: prf envelope (the nominal part pose and 10 mm around it, one yaw)"
+cargo run --locked -q -p prf-offline --bin prf -- envelope "$smoke/cell.blob" --part Part1 --from CNC1 \
+  --to Table1 --range-mm 10 --step-mm 10 --yaw-deg 0 --budget-steps 20000 -o "$smoke/envelope" | tail -n 1
+
 step "cargo test (workspace)"
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT

@@ -6,7 +6,9 @@ mod figures;
 mod synthetic;
 
 use clap::{Parser, Subcommand};
-use cli::{check_dataset, demo, firmware, generate, inspect, learn, plan, rdmp_demo, run};
+use cli::{
+    check_dataset, demo, envelope, firmware, generate, inspect, learn, plan, rdmp_demo, run,
+};
 
 #[global_allocator]
 static ALLOCATOR: bench::alloc_count::Counting = bench::alloc_count::Counting;
@@ -45,6 +47,9 @@ enum Command {
     /// Plan a task with the runtime (task plan, SkillPlan-PTT with minimum risk), print the
     /// choice, optionally export the program at 1 kHz; `--all` plans every task of the cell.
     Plan(plan::Args),
+    /// The part-pose envelope of a task: which offsets of the part's nominal pose (x, y, yaw)
+    /// at one of its location types still plan at risk 0 with the blob (table, CSV, SVG).
+    Envelope(envelope::Args),
     /// Plan one task and execute it in real time on the host cell (1 kHz, embassy-time, Ruckig
     /// output stage) against firmware-sim over iceoryx2 shared memory.
     Run(run::Args),
@@ -74,6 +79,7 @@ fn main() -> anyhow::Result<()> {
         Some(Command::Learn(args)) => learn::run(&args),
         Some(Command::Inspect(args)) => inspect::run(&args),
         Some(Command::Plan(args)) => plan::run(&args),
+        Some(Command::Envelope(args)) => envelope::run(&args),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::BenchCell(args)) => bench::cell::run(&args),
         Some(Command::Firmware(args)) => firmware::run(&args),

@@ -6,6 +6,7 @@ pub mod args;
 pub mod check_dataset;
 pub mod child;
 pub mod demo;
+pub mod envelope;
 pub mod firmware;
 pub mod generate;
 pub mod inspect;

@@ -1,0 +1,230 @@
+//! `prf envelope`: the part-pose envelope of a task ([`prf_offline::envelope`]) as a table
+//! per yaw, a CSV of every offset and an SVG map.
+
+use crate::cli::args::{TaskArgs, WorldArgs, read_blob, runtime};
+use crate::cli::progress::Bar;
+use anyhow::{Context, bail};
+use plotters::prelude::*;
+use prf_offline::envelope::{Cell, Grid, Outcome, map, safe_square};
+use prf_runtime::skill_plan::PlanBudget;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// The end of the task whose part pose moves.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum End {
+    /// Where the part is picked up (--from).
+    From,
+    /// Where it is put down (--to).
+    To,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The blob (from `prf learn`).
+    pub blob: PathBuf,
+    /// The task (all three of --part, --from, --to).
+    #[command(flatten)]
+    pub task: TaskArgs,
+    /// The floor plan.
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// Whose nominal part pose moves: the location type of --from or of --to (every location
+    /// of that type).
+    #[arg(long, value_enum, default_value = "from")]
+    pub at: End,
+    /// Largest offset along x and y of the location frame, mm.
+    #[arg(long, default_value_t = 40.0)]
+    pub range_mm: f64,
+    /// Grid step along x and y, mm.
+    #[arg(long, default_value_t = 10.0)]
+    pub step_mm: f64,
+    /// Yaw offsets about the vertical, degrees, comma separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        default_value = "-10,-5,0,5,10"
+    )]
+    pub yaw_deg: Vec<f64>,
+    /// Planning budget per offset, RDMP steps: an offset that spends it without a risk-0 plan
+    /// is shown as not known to be safe (a shifted goal may need 1.6 M steps: many candidates
+    /// fail or miss their goal before one reaches it).
+    #[arg(long, default_value_t = 2_000_000)]
+    pub budget_steps: u64,
+    /// Output directory (envelope.csv, envelope.svg).
+    #[arg(short, long, default_value = "target/prf-envelope")]
+    pub out: PathBuf,
+}
+
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    if !(a.range_mm >= 0.0 && a.step_mm > 0.0 && a.yaw_deg.iter().all(|y| y.is_finite())) {
+        bail!(
+            "--range-mm must be ≥ 0 and --step-mm > 0 (got {} and {}), --yaw-deg finite",
+            a.range_mm,
+            a.step_mm
+        );
+    }
+    let world = a.world.load()?;
+    let ft = a.task.required(&world)?;
+    let bytes = read_blob(&a.blob)?;
+    // Fails with the file's name on a corrupt blob.
+    runtime(&bytes, &a.blob, Default::default())?;
+    let (location, kind) = match a.at {
+        End::From => &ft.from,
+        End::To => &ft.to,
+    };
+    let grid = Grid {
+        range: a.range_mm * 1e-3,
+        step: a.step_mm * 1e-3,
+        yaws: a.yaw_deg.iter().map(|d| d.to_radians()).collect(),
+    };
+    let n = grid.offsets().len().pow(2) * grid.yaws.len();
+    println!(
+        "task {}: the part pose at every {kind} (here {location}) moved by up to ±{:.0} mm in x and y (step {:.0} mm) and turned by {:?}°; {n} plans, budget {} steps each",
+        ft.label(),
+        a.range_mm,
+        a.step_mm,
+        a.yaw_deg,
+        a.budget_steps
+    );
+    let bar = Bar::new("planning", "offsets", false);
+    bar.report(prf_files::Progress::Total(n as u64));
+    let cells = map(
+        &bytes,
+        &world,
+        kind,
+        (&ft.part.0, &ft.from.0, &ft.to.0),
+        &grid,
+        PlanBudget {
+            steps: a.budget_steps,
+        },
+        &|| bar.inc(),
+    )?;
+    bar.finish();
+    print_tables(&cells, &grid);
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let csv = a.out.join("envelope.csv");
+    std::fs::write(&csv, to_csv(&cells)).with_context(|| format!("writing {}", csv.display()))?;
+    let svg = a.out.join("envelope.svg");
+    let title = format!(
+        "{}: part pose at {kind} ({location}) moved; green risk 0, orange risky, grey budget spent, red no plan",
+        ft.label()
+    );
+    std::fs::write(&svg, to_svg(&cells, &grid, &title)?)
+        .with_context(|| format!("writing {}", svg.display()))?;
+    println!("wrote {} and {}", csv.display(), svg.display());
+    Ok(())
+}
+
+fn symbol(o: &Outcome) -> char {
+    match o {
+        Outcome::Safe => '●',
+        Outcome::Risky(_) => '·',
+        Outcome::Unknown(_) => '?',
+        Outcome::NoPlan => 'x',
+    }
+}
+
+/// One table per yaw: rows y (top: +range), columns x; and the safe square.
+fn print_tables(cells: &[Cell], grid: &Grid) {
+    let axis = grid.offsets();
+    println!("● risk 0 (safe)  · risky  ? budget spent, not shown safe  x no plan");
+    for &yaw in &grid.yaws {
+        let slice: Vec<&Cell> = cells.iter().filter(|c| c.dyaw == yaw).collect();
+        let safe = slice.iter().filter(|c| c.outcome == Outcome::Safe).count();
+        let square = safe_square(cells, yaw)
+            .map_or("none (the nominal pose is not safe)".into(), |r| {
+                format!("|dx|, |dy| ≤ {:.0} mm", r * 1e3)
+            });
+        println!(
+            "\nyaw {:+.1}°: {safe}/{} offsets safe; safe square around the nominal pose: {square}",
+            yaw.to_degrees(),
+            slice.len()
+        );
+        let mut head = String::from("  dy\\dx mm");
+        for x in &axis {
+            let _ = write!(head, "{:>5.0}", x * 1e3);
+        }
+        println!("{head}");
+        for y in axis.iter().rev() {
+            let mut row = format!("{:>10.0}", y * 1e3);
+            for x in &axis {
+                let c = slice.iter().find(|c| c.dx == *x && c.dy == *y);
+                let _ = write!(row, "{:>5}", c.map_or(' ', |c| symbol(&c.outcome)));
+            }
+            println!("{row}");
+        }
+    }
+}
+
+fn to_csv(cells: &[Cell]) -> String {
+    let mut s = String::from("dx_mm,dy_mm,dyaw_deg,outcome,j_mm,j_lower_mm,integrations,steps\n");
+    for c in cells {
+        let (name, j, lower) = match c.outcome {
+            Outcome::Safe => ("safe", Some(0.0), Some(0.0)),
+            Outcome::Risky(j) => ("risky", Some(j), Some(j)),
+            Outcome::Unknown(l) => ("budget", None, Some(l)),
+            Outcome::NoPlan => ("no_plan", None, None),
+        };
+        let mm = |v: Option<f64>| v.map_or(String::new(), |v| format!("{:.3}", v * 1e3));
+        let _ = writeln!(
+            s,
+            "{:.1},{:.1},{:.2},{name},{},{},{},{}",
+            c.dx * 1e3,
+            c.dy * 1e3,
+            c.dyaw.to_degrees(),
+            mm(j),
+            mm(lower),
+            c.integrations,
+            c.steps
+        );
+    }
+    s
+}
+
+/// One panel per yaw: a square per offset, green safe, orange risky, grey not shown safe,
+/// red no plan.
+fn to_svg(cells: &[Cell], grid: &Grid, title: &str) -> anyhow::Result<String> {
+    let mut svg = String::new();
+    let n = grid.yaws.len().max(1);
+    {
+        let root = SVGBackend::with_string(&mut svg, (300 * n as u32, 380)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let root = root.titled(title, ("sans-serif", 16))?;
+        let half = grid.step * 500.0;
+        let lim = grid.range * 1e3 + half;
+        for (panel, &yaw) in root.split_evenly((1, n)).iter().zip(&grid.yaws) {
+            let mut chart = ChartBuilder::on(panel)
+                .caption(format!("yaw {:+.1}°", yaw.to_degrees()), ("sans-serif", 14))
+                .margin(8)
+                .x_label_area_size(30)
+                .y_label_area_size(40)
+                .build_cartesian_2d(-lim..lim, -lim..lim)?;
+            chart
+                .configure_mesh()
+                .x_desc("dx mm")
+                .y_desc("dy mm")
+                .disable_mesh()
+                .draw()?;
+            chart.draw_series(cells.iter().filter(|c| c.dyaw == yaw).map(|c| {
+                let colour = match c.outcome {
+                    Outcome::Safe => RGBColor(46, 160, 67),
+                    Outcome::Risky(_) => RGBColor(240, 140, 30),
+                    Outcome::Unknown(_) => RGBColor(170, 170, 170),
+                    Outcome::NoPlan => RGBColor(200, 40, 40),
+                };
+                let (x, y) = (c.dx * 1e3, c.dy * 1e3);
+                Rectangle::new(
+                    [
+                        (x - half * 0.9, y - half * 0.9),
+                        (x + half * 0.9, y + half * 0.9),
+                    ],
+                    colour.filled(),
+                )
+            }))?;
+        }
+        root.present()?;
+    }
+    Ok(svg)
+}

@@ -1,0 +1,151 @@
+//! The part-pose envelope of a task (issue 22, item 3): which offsets of the part's nominal pose
+//! at a location type (x, y in the location frame, yaw about the vertical) still plan at risk
+//! 0 with a blob. It answers the cell engineer's first question: how precisely must a part be
+//! placed for the learned programs to apply.
+
+use prf_runtime::plan::plan;
+use prf_runtime::skill_plan::PlanBudget;
+use prf_runtime::{Runtime, RuntimeConfig};
+use prf_sim::tasks::{FloorTask, FloorTaskError};
+use prf_sim::world::World;
+use rayon::prelude::*;
+
+/// What planning at one offset gave.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Outcome {
+    /// A risk-0 plan: reuse is safe here.
+    Safe,
+    /// The optimum is risky: J* (m).
+    Risky(f64),
+    /// The budget ran out without a risk-0 plan: J* is at least this (m).
+    Unknown(f64),
+    /// No plan at all (nothing integrates, or the task is refused).
+    NoPlan,
+}
+
+/// One offset of the grid and its outcome.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cell {
+    /// Offset along the location frame's x and y, m, and about its vertical, rad.
+    pub dx: f64,
+    pub dy: f64,
+    pub dyaw: f64,
+    pub outcome: Outcome,
+    /// RDMP integrations and steps the plan took.
+    pub integrations: u32,
+    pub steps: u64,
+}
+
+/// The grid to map: offsets −range…range in `step` along x and y, and the given yaws.
+#[derive(Clone, Debug)]
+pub struct Grid {
+    pub range: f64,
+    pub step: f64,
+    pub yaws: Vec<f64>,
+}
+
+impl Grid {
+    /// Offsets along one axis, from −range to range.
+    pub fn offsets(&self) -> Vec<f64> {
+        let n = (self.range / self.step).round() as i64;
+        (-n..=n).map(|i| i as f64 * self.step).collect()
+    }
+}
+
+/// The world with the nominal part pose of location type `kind` moved by (dx, dy) in its
+/// frame and turned by `dyaw` (every location of that type).
+pub fn shifted(world: &World, kind: &str, dx: f64, dy: f64, dyaw: f64) -> World {
+    let mut w = world.clone();
+    for t in w.location_types.iter_mut().filter(|t| t.name == kind) {
+        t.part_pose.xyz[0] += dx;
+        t.part_pose.xyz[1] += dy;
+        t.part_pose.rpy_deg[2] += dyaw.to_degrees();
+    }
+    w
+}
+
+/// Plans task (`part`, `from`, `to`) at every offset of `grid` of the part pose at location
+/// type `kind`, each within `budget`, in parallel; `done` is called once per offset.
+#[allow(clippy::too_many_arguments)]
+pub fn map(
+    blob: &[u8],
+    world: &World,
+    kind: &str,
+    task: (&str, &str, &str),
+    grid: &Grid,
+    budget: PlanBudget,
+    done: &(dyn Fn() + Sync),
+) -> Result<Vec<Cell>, FloorTaskError> {
+    // Names are checked once, up front.
+    FloorTask::new(world, task.0, task.1, task.2)?;
+    let axis = grid.offsets();
+    let offsets: Vec<(f64, f64, f64)> = grid
+        .yaws
+        .iter()
+        .flat_map(|&yaw| {
+            let axis = &axis;
+            axis.iter()
+                .flat_map(move |&y| axis.iter().map(move |&x| (x, y, yaw)))
+        })
+        .collect();
+    let config = RuntimeConfig {
+        plan_budget: budget,
+        ..RuntimeConfig::default()
+    };
+    Ok(offsets
+        .par_iter()
+        .map(|&(dx, dy, dyaw)| {
+            let w = shifted(world, kind, dx, dy, dyaw);
+            let cell = |outcome, integrations, steps| Cell {
+                dx,
+                dy,
+                dyaw,
+                outcome,
+                integrations,
+                steps,
+            };
+            let out = match (
+                Runtime::load_with(blob, config),
+                FloorTask::new(&w, task.0, task.1, task.2),
+            ) {
+                (Ok(rt), Ok(ft)) => match plan(&rt, &ft.task()) {
+                    Ok(p) => {
+                        let s = &p.skills;
+                        let outcome = match (s.feasible, s.exhausted, s.choice) {
+                            (true, _, _) => Outcome::Safe,
+                            (false, Some(lower), _) => Outcome::Unknown(lower),
+                            (false, None, Some(_)) => Outcome::Risky(s.j),
+                            (false, None, None) => Outcome::NoPlan,
+                        };
+                        cell(outcome, s.stats.integrations, s.stats.steps)
+                    }
+                    Err(_) => cell(Outcome::NoPlan, 0, 0),
+                },
+                _ => cell(Outcome::NoPlan, 0, 0),
+            };
+            done();
+            out
+        })
+        .collect())
+}
+
+/// The largest r such that every offset with |dx|, |dy| ≤ r at yaw `dyaw` is safe (None when
+/// the nominal pose itself is not).
+pub fn safe_square(cells: &[Cell], dyaw: f64) -> Option<f64> {
+    let slice: Vec<&Cell> = cells.iter().filter(|c| c.dyaw == dyaw).collect();
+    let mut radii: Vec<f64> = slice.iter().map(|c| c.dx.abs().max(c.dy.abs())).collect();
+    radii.sort_by(f64::total_cmp);
+    radii.dedup();
+    let mut best = None;
+    for r in radii {
+        let all = slice
+            .iter()
+            .filter(|c| c.dx.abs().max(c.dy.abs()) <= r + 1e-12)
+            .all(|c| c.outcome == Outcome::Safe);
+        if !all {
+            break;
+        }
+        best = Some(r);
+    }
+    best
+}
