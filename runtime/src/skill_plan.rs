@@ -31,7 +31,9 @@
 //! demonstration ended nearest is tried first. Of the plans with the least J the one chosen
 //! minimises, in this order, the grasp index, r_Pick, the pick candidate's position, r_Place,
 //! the place candidate's position. (Among equally risky plans the safest pick and place are
-//! preferred.) The brute-force test sorts the full grid by this key.
+//! preferred.) The brute-force test sorts the full grid by this key. Grasps are searched in
+//! the order of their admissible bound, then index; a grasp of smaller index than the best
+//! plan's needs only to equal its J, so the choice is the one index order would make.
 //!
 //! The risk is that of exactly the trajectory the executor will run: the RDMP integrated from
 //! q_a,H with the executor's step Δt, at every configuration including q_a,H (the reversed

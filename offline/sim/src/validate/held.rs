@@ -147,8 +147,8 @@ pub fn check_held_part(
     };
     for h in holdings(cell, samples, tracker) {
         let to_part = h.grasp.inverse();
-        let spheres_at = |base: [f64; 3], arm: &[f64; NA]| {
-            let tcp = tcp_world(&cell.model, base, arm);
+        // The part's spheres (world) with the TCP at `tcp`.
+        let spheres_at = |tcp: &Pose| {
             h.part
                 .spheres
                 .iter()
@@ -157,13 +157,14 @@ pub fn check_held_part(
         };
         let eval = |t: f64, base: [f64; 3], arm: &[f64; NA], r: &mut PartReport| {
             r.configurations += 1;
-            let spheres = spheres_at(base, arm);
+            let tcp = tcp_world(&cell.model, base, arm);
+            let spheres = spheres_at(&tcp);
             for (c, rad) in &spheres {
                 if c.z - rad < r.min {
                     (r.min, r.min_t, r.obstacle) = (c.z - rad, t, "floor".into());
                 }
             }
-            let part_pose = tcp_world(&cell.model, base, arm) * to_part;
+            let part_pose = tcp * to_part;
             for o in cell.obstacles_near(base) {
                 if h.supports.iter().any(|s| std::ptr::eq(*s, o)) {
                     for p in &surface {
@@ -188,7 +189,8 @@ pub fn check_held_part(
                 eval(s.t, s.base, &s.arm, &mut r);
                 continue;
             };
-            let (a, b) = (spheres_at(s.base, &s.arm), spheres_at(next.base, &next.arm));
+            let tcp = |x: &Sample| tcp_world(&cell.model, x.base, &x.arm);
+            let (a, b) = (spheres_at(&tcp(s)), spheres_at(&tcp(next)));
             let moved = a
                 .iter()
                 .zip(&b)
