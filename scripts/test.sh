@@ -9,7 +9,9 @@ step() { printf '\n==> %s\n' "$*"; }
 # Debian's Rust (rustc/cargo 1.96 with matching std sources) cross-builds the no_std crates for
 # the Cortex-M7 cell controller; rustup cannot add targets on these machines. Ruckig's C++ core
 # (prf-ruckig) is cross-compiled with Debian's arm-none-eabi-g++ and newlib.
-APT_PACKAGES=(rustc-web cargo-web rust-web-src gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib)
+# Charts (SVG and PNG) set their text in DejaVu Sans.
+APT_PACKAGES=(rustc-web cargo-web rust-web-src gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib
+  fonts-dejavu-core)
 missing=()
 for p in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")

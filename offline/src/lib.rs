@@ -1,6 +1,9 @@
 //! The host tools behind `prf` that tests use too: the firmware runner ([`firmware`]: build
-//! the cell-controller firmware, run it under QEMU, read its figures and setpoint stream) and
-//! the part-pose envelope of a task ([`envelope`]).
+//! the cell-controller firmware, run it under QEMU, read its figures and setpoint stream), the
+//! part-pose envelope of a task ([`envelope`]), the paper's experiments ([`experiment`]) and
+//! the charts they draw ([`plots`]).
 
 pub mod envelope;
+pub mod experiment;
 pub mod firmware;
+pub mod plots;

@@ -2,12 +2,12 @@
 
 mod bench;
 mod cli;
-mod figures;
 mod synthetic;
 
 use clap::{Parser, Subcommand};
 use cli::{
-    check_dataset, demo, envelope, firmware, generate, inspect, learn, plan, rdmp_demo, run,
+    check_dataset, demo, envelope, experiment, firmware, generate, inspect, learn, plan, rdmp_demo,
+    run,
 };
 
 #[global_allocator]
@@ -50,6 +50,9 @@ enum Command {
     /// The part-pose envelope of a task: which offsets of the part's nominal pose (x, y, yaw)
     /// at one of its location types still plan at risk 0 with the blob (table, CSV, SVG).
     Envelope(envelope::Args),
+    /// The paper's evaluation on the example cell: `rdmp-vs-dmp` (Sec. 4.3, Fig. 3–4) and
+    /// `monte-carlo` (Sec. 6.3, Fig. 5), as tables, CSV and charts (SVG + PNG).
+    Experiment(experiment::Args),
     /// Plan one task and execute it in real time on the host cell (1 kHz, embassy-time, Ruckig
     /// output stage) against firmware-sim over iceoryx2 shared memory.
     Run(run::Args),
@@ -80,6 +83,7 @@ fn main() -> anyhow::Result<()> {
         Some(Command::Inspect(args)) => inspect::run(&args),
         Some(Command::Plan(args)) => plan::run(&args),
         Some(Command::Envelope(args)) => envelope::run(&args),
+        Some(Command::Experiment(args)) => experiment::run(&args),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::BenchCell(args)) => bench::cell::run(&args),
         Some(Command::Firmware(args)) => firmware::run(&args),

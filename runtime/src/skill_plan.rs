@@ -266,13 +266,32 @@ pub fn evaluate_arm_motion(
     bound: f64,
     cap: usize,
 ) -> Evaluation {
+    let observe = |_: &mut (), _: &ArmKinematics, _: f64| {};
+    evaluate_arm_motion_observed(rt, rdmp, goal, field, arm_base, bound, cap, || (), observe).0
+}
+
+/// [`evaluate_arm_motion`] that also shows `observe` every configuration of every run (its
+/// kinematics and the run's risk so far, which stops growing once it reaches `bound`), each
+/// run with a `fresh()` state; returns the state of the final run (the rated stream's).
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_arm_motion_observed<S>(
+    rt: &Runtime<'_>,
+    rdmp: &Rdmp,
+    goal: &Pose,
+    field: &Field<'_>,
+    arm_base: &Pose,
+    bound: f64,
+    cap: usize,
+    mut fresh: impl FnMut() -> S,
+    mut observe: impl FnMut(&mut S, &ArmKinematics, f64),
+) -> (Evaluation, S) {
     if !(bound > 0.0) {
         // Risk is never negative: nothing reaches below 0, whatever its timing.
-        return Evaluation::Pruned { steps: 0 };
+        return (Evaluation::Pruned { steps: 0 }, fresh());
     }
     let (model, cfg) = (&rt.model, &rt.config.rdmp);
     let q0 = JointVector::from(model.home);
-    // Per run: the risk so far and whether it is still below the bound.
+    // Per run: the risk so far, whether it is still below the bound, the last TCP.
     let paced = pace_observed(
         model,
         &rt.limits,
@@ -281,20 +300,21 @@ pub fn evaluate_arm_motion(
         &q0,
         goal,
         cap,
-        || (RiskAccumulator::default(), true, Pose::identity()),
-        |(acc, below, last), kin| {
+        || (RiskAccumulator::default(), true, Pose::identity(), fresh()),
+        |(acc, below, last, state), kin| {
             *last = kin.tcp;
             if *below && acc.add(model, field, arm_base, kin) >= bound {
                 *below = false;
             }
+            observe(state, kin, acc.risk());
         },
     );
-    let ((acc, below, last), steps) = (paced.observer, paced.steps);
+    let ((acc, below, last, state), steps) = (paced.observer, paced.steps);
     let (position, angle) = (
         (last.translation.vector - goal.translation.vector).norm(),
         last.rotation.angle_to(&goal.rotation),
     );
-    match paced.timing {
+    let evaluation = match paced.timing {
         Ok(_) if !(position <= REACH_POSITION && angle <= REACH_ANGLE) => Evaluation::Missed {
             position,
             angle,
@@ -313,7 +333,8 @@ pub fn evaluate_arm_motion(
             steps,
         },
         Err(TimingError::Capped) => Evaluation::Capped { steps },
-    }
+    };
+    (evaluation, state)
 }
 
 /// The configurations of an evaluated arm motion, q_a,H first: the stream the executor emits

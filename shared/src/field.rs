@@ -337,7 +337,7 @@ impl<'a> Field<'a> {
 
     /// [`Field::distance_in_cell`], stopping at the first term ≤ `stop`: the hinted term
     /// first, then the corners nearest first, then the certificates.
-    fn distance_in_cell_upto(
+    pub fn distance_in_cell_upto(
         &self,
         c: [usize; 3],
         x: &Vector3<f64>,

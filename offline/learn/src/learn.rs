@@ -3,7 +3,7 @@
 
 use crate::affordance::AffordanceSet;
 use crate::skills::{self, ArmSkill, Skill};
-use crate::workspace::{self, LearnedField, Sweep, WorkspaceConfig};
+use crate::workspace::{self, LearnedField, PathSphere, Sweep, WorkspaceConfig};
 use prf_files::dataset::{Dataset, Demonstration, Placed};
 use prf_files::{OnProgress, Progress};
 use prf_shared::JointVector;
@@ -85,15 +85,26 @@ pub struct Knowledge {
     pub timings: Vec<(&'static str, f64)>,
 }
 
-/// One instance of a class in one demonstration, with what it teaches.
-struct Lesson {
+/// One instance of a class in one demonstration, with what it teaches: what Alg. 3 lines
+/// 5–16 compute from the demonstration alone (in parallel, and once for any number of
+/// learners that add it).
+#[derive(Clone, Debug)]
+pub struct Lesson {
     class: &'static str,
     location_type: Option<usize>,
     part_type: usize,
     affordance: Option<(Frame, Pose)>,
-    /// Arm configurations of the instance and the arm base in the location frame.
-    sweep: Option<(Vec<[f64; 7]>, Pose)>,
+    /// The instance's robot spheres in the location frame, in sweep order.
+    sweep: Option<Vec<PathSphere>>,
     arm: Option<(Vec<[f64; 7]>, f64, prf_shared::rdmp::Rdmp)>,
+}
+
+/// The lessons of one demonstration.
+#[derive(Clone, Debug)]
+pub struct Lessons {
+    /// The demonstration's id.
+    pub demonstration: String,
+    lessons: Vec<Lesson>,
 }
 
 fn location_of(d: &Demonstration, l: TaskLocation) -> &Placed {
@@ -174,15 +185,15 @@ fn line(k: usize) -> usize {
     k + 2
 }
 
-/// Alg. 3, lines 5–16 for one demonstration.
+/// Alg. 3, lines 5–16 for one demonstration, with the location and part types named in
+/// `kinds` and `part_kinds`.
 fn lessons(
     model: &RobotModel,
-    ds: &Dataset,
+    kinds: &[String],
+    part_kinds: &[String],
     d: &Demonstration,
     cfg: &LearnConfig,
 ) -> Result<Vec<Lesson>, LearnError> {
-    let kinds: Vec<String> = location_kinds(ds);
-    let part_kinds = part_kinds(ds);
     let part_type = part_kinds
         .iter()
         .position(|k| *k == d.task.part.kind)
@@ -216,11 +227,17 @@ fn lessons(
                             }
                         })?;
                         let s = &d.samples[inst.at];
-                        let path = d.samples[inst.range.clone()]
+                        let path: Vec<[f64; 7]> = d.samples[inst.range.clone()]
                             .iter()
                             .map(|s| s.arm)
                             .collect();
-                        Some((path, loc.inverse() * arm_base_pose(model, s.base)))
+                        let base = loc.inverse() * arm_base_pose(model, s.base);
+                        Some(Sweep::path_spheres(
+                            model,
+                            &base,
+                            &path,
+                            cfg.workspace.resample,
+                        ))
                     }
                     _ => None,
                 }
@@ -293,83 +310,164 @@ pub fn resolve_clearance_demo(
     }
 }
 
-/// Learn (Alg. 3) on a dataset read for `model`.
+/// Learn (Alg. 3) on a dataset read for `model`: every demonstration's lessons (in
+/// parallel), added in dataset order to a [`Learner`].
 pub fn learn(
     ds: &Dataset,
     model: &RobotModel,
     cfg: &LearnConfig,
     progress: OnProgress<'_>,
 ) -> Result<Knowledge, LearnError> {
-    let clearance_demo = resolve_clearance_demo(ds.clearance_demo, cfg.clearance_demo)?;
-    let mut wc = cfg.workspace;
-    wc.epsilon = clearance_demo - cfg.clearance_acceptable;
-    if !(wc.epsilon >= 0.0) {
-        return Err(LearnError::Clearance {
-            acceptable: cfg.clearance_acceptable,
-            demo: clearance_demo,
-        });
-    }
+    let mut learner = Learner::new(ds, model, cfg)?;
     progress(Progress::Total(
-        (ds.demonstrations.len() + location_kinds(ds).len()) as u64,
+        (ds.demonstrations.len() + learner.location_kinds.len()) as u64,
     ));
     let t0 = Instant::now();
     // Lines 4–16, in parallel over demonstrations; merged in dataset order (deterministic).
-    let per_demo: Vec<Vec<Lesson>> = ds
+    let per_demo: Vec<Lessons> = ds
         .demonstrations
         .par_iter()
         .map(|d| {
-            let l = lessons(model, ds, d, cfg);
+            let l = learner.lessons(d);
             progress(Progress::Done(1));
             l
         })
         .collect::<Result<_, LearnError>>()?;
+    for l in &per_demo {
+        learner.add(l);
+    }
     let t_segment = t0.elapsed().as_secs_f64();
-    let kinds = location_kinds(ds);
-    let mut location_types: Vec<LocationTypeKnowledge> = kinds
-        .iter()
-        .map(|k| LocationTypeKnowledge {
-            name: k.clone(),
-            stances: AffordanceSet::default(),
-            field: None,
-            instances: 0,
+    let t1 = Instant::now();
+    let mut knowledge = learner.knowledge(&|p| {
+        if let Progress::Done(n) = p {
+            progress(Progress::Done(n))
+        }
+    });
+    knowledge.timings = vec![
+        ("segment + train skills", t_segment),
+        ("workspaces", t1.elapsed().as_secs_f64()),
+    ];
+    Ok(knowledge)
+}
+
+/// Learn (Alg. 3) one demonstration at a time: the state after the demonstrations added so
+/// far. Adding a demonstration merges its [`Lessons`] (affordances, skills, its spheres into
+/// the sweeps of the location types it touches); [`Learner::knowledge`] rebuilds only the
+/// fields of the location types touched since the last call. Adding in dataset order gives
+/// exactly what [`learn`] gives on the dataset ([`learn`] is this, in one pass).
+#[derive(Clone, Debug)]
+pub struct Learner {
+    robot: RobotModel,
+    description: String,
+    config: LearnConfig,
+    clearance_demo: f64,
+    location_kinds: Vec<String>,
+    part_kinds: Vec<String>,
+    location_types: Vec<LocationTypeKnowledge>,
+    part_types: Vec<PartTypeKnowledge>,
+    sweeps: Vec<Sweep>,
+    /// Location types whose field is out of date.
+    stale: Vec<bool>,
+    arms: Vec<ArmSkill>,
+    /// K before share().
+    skills: Vec<Skill>,
+    instances: Vec<(&'static str, usize)>,
+    demonstrations: usize,
+}
+
+impl Learner {
+    /// An empty learner for the types of dataset `ds` (its demonstrations are not added).
+    pub fn new(ds: &Dataset, model: &RobotModel, cfg: &LearnConfig) -> Result<Self, LearnError> {
+        let clearance_demo = resolve_clearance_demo(ds.clearance_demo, cfg.clearance_demo)?;
+        let mut config = *cfg;
+        config.workspace.epsilon = clearance_demo - cfg.clearance_acceptable;
+        if !(config.workspace.epsilon >= 0.0) {
+            return Err(LearnError::Clearance {
+                acceptable: cfg.clearance_acceptable,
+                demo: clearance_demo,
+            });
+        }
+        let location_kinds = location_kinds(ds);
+        let part_kinds = part_kinds(ds);
+        Ok(Learner {
+            robot: model.clone(),
+            description: ds.description.clone().unwrap_or_default(),
+            config,
+            clearance_demo,
+            location_types: location_kinds
+                .iter()
+                .map(|k| LocationTypeKnowledge {
+                    name: k.clone(),
+                    stances: AffordanceSet::default(),
+                    field: None,
+                    instances: 0,
+                })
+                .collect(),
+            part_types: part_kinds
+                .iter()
+                .map(|name| PartTypeKnowledge {
+                    name: name.clone(),
+                    grasps: AffordanceSet::default(),
+                })
+                .collect(),
+            sweeps: vec![Sweep::new(config.workspace.feature_spacing); location_kinds.len()],
+            stale: vec![false; location_kinds.len()],
+            location_kinds,
+            part_kinds,
+            arms: Vec::new(),
+            skills: Vec::new(),
+            instances: CLASSES.iter().map(|c| (c.name(), 0)).collect(),
+            demonstrations: 0,
         })
-        .collect();
-    let mut part_types: Vec<PartTypeKnowledge> = part_kinds(ds)
-        .into_iter()
-        .map(|name| PartTypeKnowledge {
-            name,
-            grasps: AffordanceSet::default(),
+    }
+
+    /// Alg. 3 lines 5–16 on demonstration `d` alone (segmentation, affordances, the swept
+    /// spheres, TrainRDMP): what [`Learner::add`] merges. Independent of what was added.
+    pub fn lessons(&self, d: &Demonstration) -> Result<Lessons, LearnError> {
+        Ok(Lessons {
+            demonstration: d.id.clone(),
+            lessons: lessons(
+                &self.robot,
+                &self.location_kinds,
+                &self.part_kinds,
+                d,
+                &self.config,
+            )?,
         })
-        .collect();
-    let mut paths: Vec<Vec<(Vec<[f64; 7]>, Pose)>> = vec![Vec::new(); kinds.len()];
-    let mut arms: Vec<ArmSkill> = Vec::new();
-    let mut skill_set: Vec<Skill> = Vec::new();
-    let mut instances: Vec<(&'static str, usize)> = CLASSES.iter().map(|c| (c.name(), 0)).collect();
-    for (d, lessons) in ds.demonstrations.iter().zip(per_demo) {
-        for l in lessons {
-            if let Some(c) = instances.iter_mut().find(|c| c.0 == l.class) {
+    }
+
+    /// Merges a demonstration's lessons (Alg. 3 lines 9, 11, 13–16).
+    pub fn add(&mut self, lessons: &Lessons) {
+        self.demonstrations += 1;
+        for l in &lessons.lessons {
+            if let Some(c) = self.instances.iter_mut().find(|c| c.0 == l.class) {
                 c.1 += 1;
             }
             // Line 9: A_{f_r}^{f_a}.
             match (l.affordance, l.location_type) {
                 (Some((Frame::Part, p)), _) => {
-                    part_types[l.part_type].grasps.insert(p);
+                    self.part_types[l.part_type].grasps.insert(p);
                 }
                 (Some((Frame::Location, p)), Some(t)) => {
-                    location_types[t].stances.insert(p);
+                    self.location_types[t].stances.insert(p);
                 }
                 _ => {}
             }
             // Line 11: Ω+ of the workspace frame.
-            if let (Some(s), Some(t)) = (l.sweep, l.location_type) {
-                location_types[t].instances += 1;
-                paths[t].push(s);
+            if let (Some(spheres), Some(t)) = (&l.sweep, l.location_type) {
+                self.location_types[t].instances += 1;
+                self.sweeps[t].add_spheres(&self.robot, spheres);
+                self.stale[t] = true;
             }
             // Lines 13–16: the skill (a set: equal arm motions are stored once).
-            let rdmp = l.arm.map(|(path, dt, rdmp)| {
-                skills::find_same(&arms, &path, dt).unwrap_or_else(|| {
-                    arms.push(ArmSkill { rdmp, path, dt });
-                    arms.len() - 1
+            let rdmp = l.arm.as_ref().map(|(path, dt, rdmp)| {
+                skills::find_same(&self.arms, path, *dt).unwrap_or_else(|| {
+                    self.arms.push(ArmSkill {
+                        rdmp: *rdmp,
+                        path: path.clone(),
+                        dt: *dt,
+                    });
+                    self.arms.len() - 1
                 })
             });
             let learnable = prf_shared::motion::class(l.class)
@@ -383,57 +481,65 @@ pub fn learn(
                 location_type: if learnable { l.location_type } else { None },
                 part_type: if learnable { Some(l.part_type) } else { None },
                 demo: if learnable {
-                    d.id.clone()
+                    lessons.demonstration.clone()
                 } else {
                     String::new()
                 },
                 shared: false,
             };
-            if !skill_set
+            if !self
+                .skills
                 .iter()
                 .any(|k| k.class == skill.class && k.rdmp == skill.rdmp)
             {
-                skill_set.push(skill);
+                self.skills.push(skill);
             }
         }
     }
-    // Line 20: K ← share(K).
-    skills::share(&mut skill_set);
-    let t1 = Instant::now();
-    let fields: Vec<Option<LearnedField>> = paths
-        .par_iter()
-        .map(|ps| {
-            let mut sweep = Sweep::default();
-            for (path, base) in ps {
-                sweep.add_path(model, base, path, wc.resample);
-            }
-            let f = workspace::build_field(&sweep, &wc);
-            progress(Progress::Done(1));
-            f
-        })
-        .collect();
-    for (t, f) in location_types.iter_mut().zip(fields) {
-        t.field = f;
+
+    /// Demonstrations added so far.
+    pub fn demonstrations(&self) -> usize {
+        self.demonstrations
     }
-    let t_workspace = t1.elapsed().as_secs_f64();
-    let mut config = *cfg;
-    config.workspace = wc;
-    Ok(Knowledge {
-        robot: model.clone(),
-        description: ds.description.clone().unwrap_or_default(),
-        config,
-        clearance_demo,
-        location_types,
-        part_types,
-        arms,
-        skills: skill_set,
-        instances,
-        demonstrations: ds.demonstrations.len(),
-        timings: vec![
-            ("segment + train skills", t_segment),
-            ("workspaces", t_workspace),
-        ],
-    })
+
+    /// What was learned so far (Alg. 3's output, line 20's share() included): the fields of
+    /// the location types touched since the last call are rebuilt (in parallel; `progress`
+    /// is told of each), the others kept.
+    pub fn knowledge(&mut self, progress: OnProgress<'_>) -> Knowledge {
+        let wc = self.config.workspace;
+        let stale = &self.stale;
+        let rebuilt: Vec<(usize, Option<LearnedField>)> = self
+            .sweeps
+            .par_iter_mut()
+            .enumerate()
+            .filter(|(t, _)| stale[*t])
+            .map(|(t, sweep)| {
+                let f = workspace::build_field(sweep, &wc);
+                progress(Progress::Done(1));
+                (t, f)
+            })
+            .collect();
+        for (t, f) in rebuilt {
+            self.location_types[t].field = f;
+            self.stale[t] = false;
+        }
+        let mut skill_set = self.skills.clone();
+        // Line 20: K ← share(K).
+        skills::share(&mut skill_set);
+        Knowledge {
+            robot: self.robot.clone(),
+            description: self.description.clone(),
+            config: self.config,
+            clearance_demo: self.clearance_demo,
+            location_types: self.location_types.clone(),
+            part_types: self.part_types.clone(),
+            arms: self.arms.clone(),
+            skills: skill_set,
+            instances: self.instances.clone(),
+            demonstrations: self.demonstrations,
+            timings: Vec::new(),
+        }
+    }
 }
 
 /// Skills per class, in [`CLASSES`] order.

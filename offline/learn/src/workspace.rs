@@ -21,12 +21,12 @@ use crate::edt;
 use nalgebra::Vector3;
 use prf_shared::JointVector;
 use prf_shared::field::{
-    BRICK, BRICK_NODES, CERT_BYTES, Field, FieldData, MM, NODE_BYTES, OFFSET_UNIT, UNIFORM,
+    BRICK, BRICK_NODES, CERT_BYTES, Field, FieldData, Hint, MM, NODE_BYTES, OFFSET_UNIT, UNIFORM,
 };
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
-use std::collections::{BTreeMap, HashSet};
+use std::collections::HashSet;
 
 /// Settings of workspace learning.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,29 +69,86 @@ pub struct SphereSample {
     pub radius: f64,
 }
 
-/// The demonstrated spheres of one location type, de-duplicated.
-#[derive(Default, Clone, Debug)]
+/// A robot sphere of a swept configuration: its centre in the location frame and its index
+/// in the robot model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathSphere {
+    pub centre: Vector3<f64>,
+    pub sphere: u8,
+}
+
+/// The demonstrated spheres of one location type, de-duplicated, and the feature balls
+/// thinned from them (both in the order the spheres were added, so adding paths one by one
+/// gives what adding them at once gives).
+#[derive(Clone, Debug)]
 pub struct Sweep {
     pub spheres: Vec<SphereSample>,
     seen: HashSet<(i32, i32, i32, u8)>,
+    /// Feature-ball spacing, m ([`WorkspaceConfig::feature_spacing`]).
+    feature_spacing: f64,
+    /// The thinned spheres (centre, r_j): every sphere whose centre is not within the
+    /// feature spacing of an already kept one of the same radius.
+    features: Vec<(Vector3<f64>, f64)>,
+    kept: HashSet<(i64, i64, i64, i64)>,
+    /// The last field build's splat, continued by the next one.
+    splat: Option<Splat>,
+}
+
+impl Default for Sweep {
+    /// A sweep with the default feature spacing.
+    fn default() -> Self {
+        Sweep::new(WorkspaceConfig::default().feature_spacing)
+    }
 }
 
 impl Sweep {
+    /// An empty sweep thinning its feature balls to `feature_spacing` (m).
+    pub fn new(feature_spacing: f64) -> Self {
+        Sweep {
+            spheres: Vec::new(),
+            seen: HashSet::new(),
+            feature_spacing,
+            features: Vec::new(),
+            kept: HashSet::new(),
+            splat: None,
+        }
+    }
+
     /// Adds the spheres of a configuration path (`arm` joint samples, arm base at
     /// `arm_base` in the location frame), re-sampled so no centre moves more than `step`.
     pub fn add_path(&mut self, model: &RobotModel, arm_base: &Pose, arm: &[[f64; 7]], step: f64) {
+        self.add_spheres(model, &Self::path_spheres(model, arm_base, arm, step));
+    }
+
+    /// The spheres [`Sweep::add_path`] adds, in the order it adds them, before
+    /// de-duplication.
+    pub fn path_spheres(
+        model: &RobotModel,
+        arm_base: &Pose,
+        arm: &[[f64; 7]],
+        step: f64,
+    ) -> Vec<PathSphere> {
         let n = model.spheres.len();
         let centres = |q: &JointVector| {
             let mut c = [Vector3::zeros(); MAX_SPHERES];
             ArmKinematics::new(model, q).sphere_centres(model, &mut c);
             c
         };
+        let mut out = Vec::new();
+        let mut put = |c: &[Vector3<f64>]| {
+            for (j, c) in c.iter().enumerate() {
+                out.push(PathSphere {
+                    centre: arm_base.transform_point(&(*c).into()).coords,
+                    sphere: j as u8,
+                });
+            }
+        };
         let mut prev: Option<(JointVector, [Vector3<f64>; MAX_SPHERES])> = None;
         for q in arm {
             let q = JointVector::from(*q);
             let c1 = centres(&q);
             match prev {
-                None => self.add(arm_base, &c1[..n], model),
+                None => put(&c1[..n]),
                 Some((q0, c0)) => {
                     let travel = (0..n).map(|j| (c1[j] - c0[j]).norm()).fold(0.0, f64::max);
                     let parts = (travel / step).ceil().max(1.0) as usize;
@@ -102,29 +159,36 @@ impl Sweep {
                         } else {
                             centres(&q0.lerp(&q, t))
                         };
-                        self.add(arm_base, &c[..n], model);
+                        put(&c[..n]);
                     }
                 }
             }
             prev = Some((q, c1));
         }
+        out
     }
 
-    fn add(&mut self, arm_base: &Pose, centres: &[Vector3<f64>], model: &RobotModel) {
-        for (j, (c, s)) in centres.iter().zip(&model.spheres).enumerate() {
-            let p = arm_base.transform_point(&(*c).into()).coords;
+    /// Adds spheres (from [`Sweep::path_spheres`]) not seen yet.
+    pub fn add_spheres(&mut self, model: &RobotModel, spheres: &[PathSphere]) {
+        for s in spheres {
+            let p = s.centre;
             // Re-visited configurations (the reversal, repeated programs) add nothing new.
             let key = (
                 (p.x / 2e-4).round() as i32,
                 (p.y / 2e-4).round() as i32,
                 (p.z / 2e-4).round() as i32,
-                j as u8,
+                s.sphere,
             );
             if self.seen.insert(key) {
-                self.spheres.push(SphereSample {
-                    centre: p,
-                    radius: s.radius,
-                });
+                let radius = model.spheres[s.sphere as usize].radius;
+                self.spheres.push(SphereSample { centre: p, radius });
+                let k = |v: f64| (v / self.feature_spacing).round() as i64;
+                if self
+                    .kept
+                    .insert((k(p.x), k(p.y), k(p.z), (radius * 1e4) as i64))
+                {
+                    self.features.push((p, radius));
+                }
             }
         }
     }
@@ -167,66 +231,95 @@ impl LearnedField {
     }
 }
 
+/// The grid of a field: the feature balls' box plus a margin ([`WorkspaceConfig::far`] and a
+/// node), widened outward to multiples of [`ANCHOR`] nodes from the frame's origin, so that a
+/// growing sweep keeps its grid (and its splatted features) until it crosses a multiple.
+/// Returns the first node's position and the node counts (whole bricks).
+fn grid(balls: &[(Vector3<f64>, f64)], cfg: &WorkspaceConfig) -> (Vector3<f64>, [usize; 3]) {
+    let h = cfg.voxel as f32 as f64;
+    let (mut lo, mut hi) = (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN));
+    for (c, r) in balls {
+        lo = lo.inf(&(c - Vector3::repeat(*r)));
+        hi = hi.sup(&(c + Vector3::repeat(*r)));
+    }
+    let margin = cfg.far + h;
+    let step = ANCHOR as f64 * h;
+    let first = (lo - Vector3::repeat(margin)).map(|v| (v / step).floor());
+    let last = (hi + Vector3::repeat(margin)).map(|v| (v / step).ceil());
+    let lo = first.map(|k| (k * step) as f32 as f64);
+    let dims = core::array::from_fn(|a| {
+        let n = ((last[a] - first[a]) as usize) * ANCHOR + 1;
+        n.div_ceil(BRICK) * BRICK
+    });
+    (lo, dims)
+}
+
+/// Field grids start and end on multiples of this many nodes.
+pub const ANCHOR: usize = 4;
+
+/// The splatted features of the last field build of a sweep: per node the value of the
+/// deepest feature ball and its index, for the first `done` balls, on the grid `key`.
+#[derive(Clone, Debug)]
+struct Splat {
+    key: (Vector3<f64>, [usize; 3], f64, f64, f64),
+    value: Vec<f64>,
+    feature: Vec<u32>,
+    done: usize,
+}
+
 /// Builds the field of Ω+ from the demonstrated spheres (steps 2–5 of the module doc).
-pub fn build_field(sweep: &Sweep, cfg: &WorkspaceConfig) -> Option<LearnedField> {
+pub fn build_field(sweep: &mut Sweep, cfg: &WorkspaceConfig) -> Option<LearnedField> {
     if sweep.spheres.is_empty() {
         return None;
     }
     // Node positions as the runtime computes them (f32 origin and spacing in the blob).
     let h = cfg.voxel as f32 as f64;
     let eps = cfg.epsilon;
-    // Feature balls: a thinned subset (every sphere whose centre is not within
-    // feature_spacing of an already kept ball of the same radius).
-    let mut kept: HashSet<(i64, i64, i64, i64)> = HashSet::new();
-    let mut balls: Vec<(Vector3<f64>, f64)> = Vec::new();
-    for s in &sweep.spheres {
-        let k = |v: f64| (v / cfg.feature_spacing).round() as i64;
-        let key = (
-            k(s.centre.x),
-            k(s.centre.y),
-            k(s.centre.z),
-            (s.radius * 1e4) as i64,
-        );
-        if kept.insert(key) {
-            balls.push((s.centre, s.radius + eps));
-        }
-    }
-    // Grid: the balls' box plus a margin, whole bricks.
-    let (mut lo, mut hi) = (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN));
-    for (c, r) in &balls {
-        lo = lo.inf(&(c - Vector3::repeat(*r)));
-        hi = hi.sup(&(c + Vector3::repeat(*r)));
-    }
-    let margin = cfg.far + h;
-    lo = (lo - Vector3::repeat(margin)).map(|v| v as f32 as f64);
-    hi += Vector3::repeat(margin);
-    let dims: [usize; 3] = core::array::from_fn(|a| {
-        let n = ((hi[a] - lo[a]) / h).ceil() as usize + 1;
-        n.div_ceil(BRICK) * BRICK
-    });
-    let [nx, ny, nz] = dims;
+    // Feature balls: the sweep's thinned spheres, dilated by ε.
+    debug_assert_eq!(sweep.feature_spacing, cfg.feature_spacing);
+    let balls: Vec<(Vector3<f64>, f64)> =
+        sweep.features.iter().map(|(c, r)| (*c, r + eps)).collect();
+    let (lo, dims) = grid(&balls, cfg);
+    let [_, ny, nz] = dims;
     let idx = |i: usize, j: usize, k: usize| (i * ny + j) * nz + k;
     let pos = |i: usize, j: usize, k: usize| lo + Vector3::new(i as f64, j as f64, k as f64) * h;
-    // Step 2: features by splatting.
-    let mut value = vec![f64::INFINITY; nx * ny * nz];
-    let mut feature = vec![u32::MAX; nx * ny * nz];
-    for (b, (c, r)) in balls.iter().enumerate() {
+    // Step 2: features by splatting, continuing the last build's when the grid is the same.
+    let key = (lo, dims, eps, cfg.reach, h);
+    let mut splat = match sweep.splat.take() {
+        Some(s) if s.key == key && s.done <= balls.len() => s,
+        _ => Splat {
+            key,
+            value: vec![f64::INFINITY; dims.iter().product()],
+            feature: vec![u32::MAX; dims.iter().product()],
+            done: 0,
+        },
+    };
+    for (b, (c, r)) in balls.iter().enumerate().skip(splat.done) {
         let reach = r + cfg.reach;
         let from = |a: usize| (((c[a] - reach - lo[a]) / h).floor().max(0.0)) as usize;
         let to = |a: usize| ((((c[a] + reach - lo[a]) / h).ceil()) as usize).min(dims[a] - 1);
         for i in from(0)..=to(0) {
+            let dx = pos(i, 0, 0).x - c.x;
             for j in from(1)..=to(1) {
+                let dy = pos(0, j, 0).y - c.y;
+                let dxy = dx * dx + dy * dy;
+                let row = idx(i, j, 0);
                 for k in from(2)..=to(2) {
-                    let d = (pos(i, j, k) - c).norm() - r;
-                    let n = idx(i, j, k);
-                    if d < value[n] {
-                        value[n] = d;
-                        feature[n] = b as u32;
+                    let dz = pos(0, 0, k).z - c.z;
+                    let d = (dxy + dz * dz).sqrt() - r;
+                    let n = row + k;
+                    if d < splat.value[n] {
+                        splat.value[n] = d;
+                        splat.feature[n] = b as u32;
                     }
                 }
             }
         }
     }
+    splat.done = balls.len();
+    let mut value = splat.value.clone();
+    let feature = splat.feature.clone();
+    sweep.splat = Some(splat);
     // Step 3: far field from the EDT to the nodes inside Ω+.
     let mut sq: Vec<f64> = value
         .iter()
@@ -330,40 +423,55 @@ fn encode_node(v: &Vector3<f64>, value: f64, ball: Option<(Vector3<f64>, f64)>) 
 /// ball B(c, r + ε) becomes a certificate of that cell.
 fn certificates(learned: &LearnedField, sweep: &Sweep, cfg: &WorkspaceConfig) -> Vec<u8> {
     let field = learned.field();
-    let mut extra: BTreeMap<u32, Vec<(Vector3<f64>, f64)>> = BTreeMap::new();
+    let [nx, ny, nz] = field.dims();
+    // Certificate balls per cell, indexed by cell.
+    let mut extra: Vec<Vec<(Vector3<f64>, f64)>> = vec![Vec::new(); (nx - 1) * (ny - 1) * (nz - 1)];
     let m = cfg.certify_margin;
+    let mut hint = Hint::default();
     for s in &sweep.spheres {
-        let mut cells: Vec<[usize; 3]> = (0..8)
-            .map(|b| {
-                let corner = s.centre
-                    + Vector3::new(
-                        if b & 1 == 0 { -m } else { m },
-                        if b & 2 == 0 { -m } else { m },
-                        if b & 4 == 0 { -m } else { m },
-                    );
-                field.cell_at(&corner)
-            })
-            .collect();
-        cells.sort_unstable();
-        cells.dedup();
+        // The cells the margin ball touches: those of its box's corners (per axis the cell
+        // of the lowest and of the highest corner, and every cell between).
+        let (a, b) = (
+            field.cell_at(&(s.centre - Vector3::repeat(m))),
+            field.cell_at(&(s.centre + Vector3::repeat(m))),
+        );
+        let mut cells = [[0usize; 3]; 8];
+        let mut n = 0;
+        for i in a[0]..=b[0] {
+            for j in a[1]..=b[1] {
+                for k in a[2]..=b[2] {
+                    if n < cells.len() {
+                        cells[n] = [i, j, k];
+                        n += 1;
+                    }
+                }
+            }
+        }
         // Its own ball, quantized to mm with the radius shrunk by the rounding error.
         let q = s.centre.map(|v| (v / MM).round() * MM);
         let r = (((s.radius + cfg.epsilon) - (q - s.centre).norm()) / MM).floor() * MM;
-        for cell in cells {
-            let key = field.cell_index(cell);
-            let mut d = field.distance_in_cell(cell, &s.centre);
-            if let Some(list) = extra.get(&key) {
-                for (c, rr) in list {
-                    d = d.min((s.centre - c).norm() - rr);
-                }
+        let certified = |d: f64| d + s.radius <= -m;
+        for &cell in &cells[..n] {
+            let key = field.cell_index(cell) as usize;
+            // The lookup may stop at the first term that certifies the sphere.
+            let mut d = field.distance_in_cell_upto(cell, &s.centre, -m - s.radius, &mut hint);
+            if !certified(d) {
+                d = field.distance_in_cell(cell, &s.centre);
             }
-            if d + s.radius > -m {
-                extra.entry(key).or_default().push((q, r));
+            for (c, rr) in &extra[key] {
+                if certified(d) {
+                    break;
+                }
+                d = d.min((s.centre - c).norm() - rr);
+            }
+            if !certified(d) {
+                extra[key].push((q, r));
             }
         }
     }
     let mut out = Vec::new();
-    for (cell, list) in extra {
+    for (cell, list) in extra.iter().enumerate() {
+        let cell = cell as u32;
         for (c, r) in list {
             out.extend_from_slice(&cell.to_le_bytes());
             for v in c.iter() {

@@ -1,11 +1,13 @@
 //! `prf envelope`: the part-pose envelope of a task ([`prf_offline::envelope`]) as a table
-//! per yaw, a CSV of every offset and an SVG map.
+//! per yaw, a CSV of every offset and a map (SVG and PNG).
 
 use crate::cli::args::{TaskArgs, WorldArgs, read_blob, runtime};
 use crate::cli::progress::Bar;
 use anyhow::{Context, bail};
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use prf_offline::envelope::{Cell, Grid, Outcome, map, safe_square};
+use prf_offline::plots::{self, Chart};
 use prf_runtime::skill_plan::PlanBudget;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -52,7 +54,7 @@ pub struct Args {
     /// fail or miss their goal before one reaches it).
     #[arg(long, default_value_t = 2_000_000)]
     pub budget_steps: u64,
-    /// Output directory (envelope.csv, envelope.svg).
+    /// Output directory (envelope.csv, envelope.svg, envelope.png).
     #[arg(short, long, default_value = "target/prf-envelope")]
     pub out: PathBuf,
 }
@@ -106,14 +108,24 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let csv = a.out.join("envelope.csv");
     std::fs::write(&csv, to_csv(&cells)).with_context(|| format!("writing {}", csv.display()))?;
-    let svg = a.out.join("envelope.svg");
     let title = format!(
         "{}: part pose at {kind} ({location}) moved; green risk 0, orange risky, grey budget spent, red no plan",
         ft.label()
     );
-    std::fs::write(&svg, to_svg(&cells, &grid, &title)?)
-        .with_context(|| format!("writing {}", svg.display()))?;
-    println!("wrote {} and {}", csv.display(), svg.display());
+    let [svg, png] = plots::save(
+        &EnvelopeMap {
+            cells: &cells,
+            grid: &grid,
+            title: &title,
+        },
+        &a.out.join("envelope"),
+    )?;
+    println!(
+        "wrote {}, {} and {}",
+        csv.display(),
+        svg.display(),
+        png.display()
+    );
     Ok(())
 }
 
@@ -185,16 +197,27 @@ fn to_csv(cells: &[Cell]) -> String {
 
 /// One panel per yaw: a square per offset, green safe, orange risky, grey not shown safe,
 /// red no plan.
-fn to_svg(cells: &[Cell], grid: &Grid, title: &str) -> anyhow::Result<String> {
-    let mut svg = String::new();
-    let n = grid.yaws.len().max(1);
+struct EnvelopeMap<'a> {
+    cells: &'a [Cell],
+    grid: &'a Grid,
+    title: &'a str,
+}
+
+impl Chart for EnvelopeMap<'_> {
+    fn size(&self) -> (u32, u32) {
+        (300 * self.grid.yaws.len().max(1) as u32, 380)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+    where
+        DB::ErrorType: 'static,
     {
-        let root = SVGBackend::with_string(&mut svg, (300 * n as u32, 380)).into_drawing_area();
+        let n = self.grid.yaws.len().max(1);
         root.fill(&WHITE)?;
-        let root = root.titled(title, ("sans-serif", 16))?;
-        let half = grid.step * 500.0;
-        let lim = grid.range * 1e3 + half;
-        for (panel, &yaw) in root.split_evenly((1, n)).iter().zip(&grid.yaws) {
+        let root = root.titled(self.title, ("sans-serif", 16))?;
+        let half = self.grid.step * 500.0;
+        let lim = self.grid.range * 1e3 + half;
+        for (panel, &yaw) in root.split_evenly((1, n)).iter().zip(&self.grid.yaws) {
             let mut chart = ChartBuilder::on(panel)
                 .caption(format!("yaw {:+.1}°", yaw.to_degrees()), ("sans-serif", 14))
                 .margin(8)
@@ -207,7 +230,7 @@ fn to_svg(cells: &[Cell], grid: &Grid, title: &str) -> anyhow::Result<String> {
                 .y_desc("dy mm")
                 .disable_mesh()
                 .draw()?;
-            chart.draw_series(cells.iter().filter(|c| c.dyaw == yaw).map(|c| {
+            chart.draw_series(self.cells.iter().filter(|c| c.dyaw == yaw).map(|c| {
                 let colour = match c.outcome {
                     Outcome::Safe => RGBColor(46, 160, 67),
                     Outcome::Risky(_) => RGBColor(240, 140, 30),
@@ -224,7 +247,6 @@ fn to_svg(cells: &[Cell], grid: &Grid, title: &str) -> anyhow::Result<String> {
                 )
             }))?;
         }
-        root.present()?;
+        Ok(())
     }
-    Ok(svg)
 }

@@ -7,6 +7,7 @@ pub mod check_dataset;
 pub mod child;
 pub mod demo;
 pub mod envelope;
+pub mod experiment;
 pub mod firmware;
 pub mod generate;
 pub mod inspect;

@@ -1,8 +1,9 @@
 //! `prf rdmp-demo`: what the math core does, on the built-in robot, in one screen.
 
-use crate::{figures, synthetic};
+use crate::synthetic;
 use anyhow::{Context, Result};
 use nalgebra::{Isometry3, Translation3, Vector3};
+use prf_offline::plots::{self, LinePlot, Series};
 use prf_shared::dmp::DmpParams;
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::nullspace::kernel;
@@ -16,7 +17,7 @@ use std::path::PathBuf;
 #[derive(clap::Args, Default)]
 pub struct Args {
     /// Write the demonstration, its reproduction and every generalised trajectory as CSV
-    /// (t, a1..a7) into this directory, with `elbow.svg`: the elbow's x over time for all of
+    /// (t, a1..a7) into this directory, with `elbow.svg` and `elbow.png`: the elbow's x over time for all of
     /// them (the paper's Fig. 3iv).
     #[arg(long)]
     csv: Option<PathBuf>,
@@ -168,7 +169,7 @@ pub fn run(args: &Args) -> Result<()> {
                 .translation
                 .x
         };
-        let mut series = vec![figures::Series {
+        let mut series = vec![Series {
             name: "demonstration".into(),
             points: demo
                 .iter()
@@ -176,26 +177,32 @@ pub fn run(args: &Args) -> Result<()> {
                 .map(|(k, q)| (k as f64 * DEMO_DT, elbow_x(q)))
                 .collect(),
             emphasis: true,
+            colour: 0,
         }];
-        for (dir, traj) in &runs {
-            series.push(figures::Series {
+        for (i, (dir, traj)) in runs.iter().enumerate() {
+            series.push(Series {
                 name: format!("goal {}", fmt_vec(&(dir * 0.1))),
                 points: steps(traj, cfg.dt, &q0)
                     .step_by(10)
                     .map(|(t, q)| (t, elbow_x(&q)))
                     .collect(),
                 emphasis: false,
+                colour: i,
             });
         }
-        let svg = figures::line_plot(
-            "RDMP generalisation: elbow (link 4) x",
-            "t [s]",
-            "x [m], arm base frame",
-            &series,
+        plots::save(
+            &LinePlot {
+                title: "RDMP generalisation: elbow (link 4) x",
+                x_label: "t [s]",
+                y_label: "x [m], arm base frame",
+                series: &series,
+            },
+            &dir.join("elbow"),
         )?;
-        let path = dir.join("elbow.svg");
-        std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
-        println!("trajectories and elbow.svg written to {}", dir.display());
+        println!(
+            "trajectories and elbow.svg/.png written to {}",
+            dir.display()
+        );
     }
     Ok(())
 }

@@ -2,6 +2,36 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
+use std::process::Command;
+
+/// Runs `prf` with `args` and `-o dir`; returns its standard output (panics with both
+/// outputs when it fails).
+pub fn run_prf(args: &[&str], dir: &std::path::Path) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_prf"))
+        .args(args)
+        .arg("-o")
+        .arg(dir)
+        .output()
+        .expect("start prf");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "prf {args:?}: {stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+/// Asserts that every `dir/NAME.svg` and `dir/NAME.png` holds more than a kilobyte.
+pub fn assert_charts(dir: &std::path::Path, names: &[String]) {
+    for name in names {
+        for ext in ["svg", "png"] {
+            let p = dir.join(format!("{name}.{ext}"));
+            let len = std::fs::metadata(&p).map(|m| m.len()).unwrap_or(0);
+            assert!(len > 1000, "{} has {len} bytes", p.display());
+        }
+    }
+}
 
 /// A fresh, empty directory under the system temp dir, removed on drop.
 pub struct TempDir(pub PathBuf);

@@ -1,0 +1,484 @@
+//! The paper's Sec. 4.3 (Fig. 3 and 4): the risk of RDMP and joint-space DMP trajectories
+//! generalised to new goals around a single demonstration.
+//!
+//! Per approach of the cell (a location type and one of its stances): a ground-truth
+//! demonstration of the afforded task that picks there with the part at its nominal pose and
+//! the first grasp, generated from q_a,H by the cell's motion planner; Ω+ learned from it
+//! (ε = r_d − r, 0.02 m in the example cell); TrainRDMP (Alg. 1) and a joint-space DMP
+//! (Eq. 4) on its Pick arm motion. Then, for each goal of a horizontal grid centred at the
+//! demonstrated TCP goal (same height and orientation): IntegrateRDMP (Alg. 2) from q_a,H,
+//! the DMP (Eq. 5) from q_a,H to the RDMP's final configuration, and the risk (Eq. 16) of
+//! both in Ω+. Goals the ground-truth IK cannot reach are kept and marked.
+
+use anyhow::{Context, Result, anyhow, bail};
+use nalgebra::{SVector, Translation3, Vector3};
+use prf_files::dataset::{Dataset, Demonstration};
+use prf_learn::learn::location_kinds;
+use prf_learn::workspace::LearnedField;
+use prf_learn::{LearnConfig, learn, skills};
+use prf_shared::dmp::PositionDmp;
+use prf_shared::field::DistanceField;
+use prf_shared::kinematics::{ArmKinematics, arm_base_pose};
+use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpRun};
+use prf_shared::risk::RiskAccumulator;
+use prf_shared::robot::RobotModel;
+use prf_shared::se3::{Pose, pose_from_array};
+use prf_shared::{JointVector, NA};
+use prf_sim::demogen::ik::{IkConfig, solutions};
+use prf_sim::world::{AffordedTask, World};
+use rayon::prelude::*;
+
+/// The link whose origin stands for whole-arm motion (the paper's elbow, link 4).
+pub const ELBOW_LINK: usize = 4;
+/// Elbow traces keep one sample per this many integration steps.
+pub const TRACE_EVERY: usize = 40;
+/// The DMP reached the RDMP's final configuration when every joint ends this close, rad (a
+/// DMP converges to its goal; at t = τ it is 0.1–0.3 mrad short on these motions).
+pub const DMP_REACH: f64 = 1e-3;
+/// The RDMP reached a goal when its final TCP is this close in position, m ...
+pub const REACH_POSITION: f64 = 1e-3;
+/// ... and in orientation, rad (0.5°).
+pub const REACH_ANGLE: f64 = 0.5 * std::f64::consts::PI / 180.0;
+
+/// The grid of new goals: `n` × `n` offsets in [−half_extent, half_extent]² (arm base frame
+/// x and y, which are horizontal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GoalGrid {
+    /// Half the side of the square, m.
+    pub half_extent: f64,
+    /// Goals per side (odd, so the demonstrated goal is one of them).
+    pub n: usize,
+}
+
+impl Default for GoalGrid {
+    /// ±0.1 m at 10 mm: 21 × 21 = 441 goals.
+    fn default() -> Self {
+        GoalGrid {
+            half_extent: 0.1,
+            n: 21,
+        }
+    }
+}
+
+impl GoalGrid {
+    /// The offsets along one axis, m.
+    pub fn offsets(&self) -> Vec<f64> {
+        let n = self.n.max(1);
+        if n == 1 {
+            return vec![0.0];
+        }
+        (0..n)
+            .map(|i| -self.half_extent + 2.0 * self.half_extent * i as f64 / (n - 1) as f64)
+            .collect()
+    }
+
+    /// Spacing, m.
+    pub fn spacing(&self) -> f64 {
+        if self.n > 1 {
+            2.0 * self.half_extent / (self.n - 1) as f64
+        } else {
+            0.0
+        }
+    }
+}
+
+/// One approach of the cell: a location type, one of its stances, and the afforded task
+/// whose demonstration picks there.
+#[derive(Clone, Debug)]
+pub struct Approach {
+    /// "CNC front".
+    pub name: String,
+    pub task: AffordedTask,
+}
+
+/// Every approach of the world: per location type and stance, the first afforded task that
+/// picks there with the first part and grasp and places at another location type (so the
+/// pick location's Ω+ is learned from the pick alone).
+pub fn approaches(world: &World) -> Vec<Approach> {
+    let mut out = Vec::new();
+    let all = world.afforded_tasks();
+    for t in &world.location_types {
+        for (a, approach) in t.approaches.iter().enumerate() {
+            let found = all.iter().find(|x| {
+                let (from, to) = (
+                    world.location_type(x.task.from),
+                    world.location_type(x.task.to),
+                );
+                from.name == t.name
+                    && to.name != t.name
+                    && x.approach_from == a
+                    && x.grasp == 0
+                    && x.task.part == 0
+            });
+            if let Some(task) = found {
+                out.push(Approach {
+                    name: format!("{} {}", t.name, approach.name),
+                    task: *task,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// How an integration ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Ending {
+    /// Within [`REACH_POSITION`] and [`REACH_ANGLE`] of the goal (for the DMP: within
+    /// [`DMP_REACH`] of the RDMP's final configuration in every joint).
+    Reached,
+    /// Integrated, but ended this far from the goal (m, rad).
+    Missed { position: f64, angle: f64 },
+    /// The DMP integrated, but ended this far from its goal configuration (largest joint
+    /// error, rad).
+    MissedJoints { error: f64 },
+    /// Could not be integrated.
+    Failed(String),
+}
+
+/// A generalised trajectory.
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    pub ending: Ending,
+    /// Risk (Eq. 16) in the approach's Ω+, m (NaN when it failed).
+    pub risk: f64,
+    /// Final configuration.
+    pub end: [f64; NA],
+    /// (t, elbow x in the arm base frame) every [`TRACE_EVERY`] steps.
+    pub elbow: Vec<(f64, f64)>,
+}
+
+/// The outcome at one goal of the grid.
+#[derive(Clone, Debug)]
+pub struct GoalOutcome {
+    /// Offset from the demonstrated goal, arm base frame, m.
+    pub dx: f64,
+    pub dy: f64,
+    /// The ground-truth IK found a configuration for the goal.
+    pub reachable: bool,
+    pub rdmp: Trajectory,
+    /// The DMP to the RDMP's final configuration (None when the RDMP failed).
+    pub dmp: Option<Trajectory>,
+}
+
+/// Everything measured on one approach.
+#[derive(Clone, Debug)]
+pub struct ApproachResult {
+    pub name: String,
+    /// The afforded task's label.
+    pub label: String,
+    /// The demonstrated Pick arm motion, uniformly sampled every `dt`.
+    pub demo: Vec<[f64; NA]>,
+    pub dt: f64,
+    /// The demonstrated TCP goal, arm base frame.
+    pub goal: Pose,
+    /// The arm base in the location frame.
+    pub arm_base: Pose,
+    /// Ω+ of the location type, learned from the demonstration alone.
+    pub field: LearnedField,
+    pub goals: Vec<GoalOutcome>,
+    pub grid: GoalGrid,
+}
+
+/// Figures of one primitive over the goals it integrated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Summary {
+    /// Goals it integrated, reached (within tolerance), of all.
+    pub integrated: usize,
+    pub reached: usize,
+    pub goals: usize,
+    pub mean_risk: f64,
+    pub max_risk: f64,
+    /// Share of integrated goals at risk 0.
+    pub zero: f64,
+}
+
+impl ApproachResult {
+    /// Summaries of the RDMP and of the DMP.
+    pub fn summaries(&self) -> (Summary, Summary) {
+        let of = |ts: Vec<&Trajectory>| {
+            let ok: Vec<f64> = ts
+                .iter()
+                .filter(|t| !matches!(t.ending, Ending::Failed(_)))
+                .map(|t| t.risk)
+                .collect();
+            let n = ok.len().max(1) as f64;
+            Summary {
+                integrated: ok.len(),
+                reached: ts.iter().filter(|t| t.ending == Ending::Reached).count(),
+                goals: self.goals.len(),
+                mean_risk: ok.iter().sum::<f64>() / n,
+                max_risk: ok.iter().copied().fold(0.0, f64::max),
+                zero: ok.iter().filter(|r| **r == 0.0).count() as f64 / n,
+            }
+        };
+        (
+            of(self.goals.iter().map(|g| &g.rdmp).collect()),
+            of(self.goals.iter().filter_map(|g| g.dmp.as_ref()).collect()),
+        )
+    }
+
+    /// Share of goals with both trajectories integrated where the RDMP's risk ≤ the DMP's.
+    pub fn rdmp_not_worse(&self) -> f64 {
+        let both: Vec<(f64, f64)> = self
+            .goals
+            .iter()
+            .filter_map(|g| g.dmp.as_ref().map(|d| (g.rdmp.risk, d.risk)))
+            .filter(|(r, d)| r.is_finite() && d.is_finite())
+            .collect();
+        both.iter().filter(|(r, d)| r <= d).count() as f64 / both.len().max(1) as f64
+    }
+}
+
+/// The elbow's x in the arm base frame.
+pub fn elbow_x(model: &RobotModel, q: &JointVector) -> f64 {
+    ArmKinematics::new(model, q).frames[ELBOW_LINK]
+        .translation
+        .x
+}
+
+/// Risk of configuration `q` added to `acc`.
+fn add_risk(
+    acc: &mut RiskAccumulator,
+    model: &RobotModel,
+    field: &impl DistanceField,
+    arm_base: &Pose,
+    q: &JointVector,
+) {
+    acc.add(model, field, arm_base, &ArmKinematics::new(model, q));
+}
+
+/// IntegrateRDMP from q_a,H to `goal`, with its risk and elbow trace.
+fn rdmp_trajectory(
+    model: &RobotModel,
+    rdmp: &Rdmp,
+    goal: &Pose,
+    field: &impl DistanceField,
+    arm_base: &Pose,
+) -> Trajectory {
+    let cfg = RdmpConfig::default();
+    let q0 = JointVector::from(model.home);
+    let mut acc = RiskAccumulator::default();
+    add_risk(&mut acc, model, field, arm_base, &q0);
+    let mut elbow = vec![(0.0, elbow_x(model, &q0))];
+    let failed = |e: String| Trajectory {
+        ending: Ending::Failed(e),
+        risk: f64::NAN,
+        end: model.home,
+        elbow: Vec::new(),
+    };
+    let mut run = match RdmpRun::new(model, rdmp, &q0, goal, &cfg) {
+        Ok(r) => r,
+        Err(e) => return failed(e.to_string()),
+    };
+    let mut k = 0;
+    while !run.finished() {
+        let step = match run.step(model, rdmp, &cfg) {
+            Ok(s) => s,
+            Err(e) => return failed(e.to_string()),
+        };
+        k += 1;
+        add_risk(&mut acc, model, field, arm_base, &step.q);
+        if k % TRACE_EVERY == 0 {
+            elbow.push((k as f64 * cfg.dt, elbow_x(model, &step.q)));
+        }
+    }
+    let q = *run.q();
+    let tcp = ArmKinematics::new(model, &q).tcp;
+    let position = (tcp.translation.vector - goal.translation.vector).norm();
+    let angle = tcp.rotation.angle_to(&goal.rotation);
+    Trajectory {
+        ending: if position <= REACH_POSITION && angle <= REACH_ANGLE {
+            Ending::Reached
+        } else {
+            Ending::Missed { position, angle }
+        },
+        risk: acc.risk(),
+        end: q.into(),
+        elbow,
+    }
+}
+
+/// The joint-space DMP from q_a,H to `end`, with its risk and elbow trace.
+fn dmp_trajectory(
+    model: &RobotModel,
+    dmp: &PositionDmp<NA>,
+    end: &[f64; NA],
+    field: &impl DistanceField,
+    arm_base: &Pose,
+) -> Trajectory {
+    let dt = RdmpConfig::default().dt;
+    let (y0, goal) = (SVector::from(model.home), SVector::from(*end));
+    let (mut state, mut phase) = match dmp.start(&y0, &goal, dt) {
+        Ok(s) => s,
+        Err(e) => {
+            return Trajectory {
+                ending: Ending::Failed(e.to_string()),
+                risk: f64::NAN,
+                end: model.home,
+                elbow: Vec::new(),
+            };
+        }
+    };
+    let mut acc = RiskAccumulator::default();
+    add_risk(&mut acc, model, field, arm_base, &state.y);
+    let mut elbow = vec![(0.0, elbow_x(model, &state.y))];
+    while !phase.finished() {
+        state.step(&dmp.params, &dmp.forcing, dmp.tau, dt, &phase);
+        phase.advance();
+        add_risk(&mut acc, model, field, arm_base, &state.y);
+        if phase.step % TRACE_EVERY == 0 {
+            elbow.push((phase.step as f64 * dt, elbow_x(model, &state.y)));
+        }
+    }
+    let miss = (state.y - goal).amax();
+    Trajectory {
+        ending: if miss <= DMP_REACH {
+            Ending::Reached
+        } else {
+            Ending::MissedJoints { error: miss }
+        },
+        risk: acc.risk(),
+        end: state.y.into(),
+        elbow,
+    }
+}
+
+/// The Pick arm motion of a demonstration: its forward samples and the arm base (world) at
+/// it.
+fn pick_motion(model: &RobotModel, d: &Demonstration) -> Result<(Vec<[f64; NA]>, f64, Pose)> {
+    let pick = prf_shared::motion::class("Pick").ok_or_else(|| anyhow!("no Pick class"))?;
+    let mut found = None;
+    pick.segment(&d.samples, &mut |inst| {
+        if found.is_none() {
+            found = inst.arm.map(|a| (a.forward, inst.at));
+        }
+    });
+    let (forward, at) = found.ok_or_else(|| anyhow!("demonstration {} has no Pick", d.id))?;
+    let (path, dt) = skills::uniform_path(&d.samples[forward]);
+    Ok((path, dt, arm_base_pose(model, d.samples[at].base)))
+}
+
+/// Runs the experiment on one approach whose demonstration is `demo` of `dataset` (the
+/// dataset's other demonstrations are not used).
+pub fn run_approach(
+    model: &RobotModel,
+    dataset: &Dataset,
+    demo: usize,
+    name: &str,
+    label: &str,
+    grid: GoalGrid,
+) -> Result<ApproachResult> {
+    let d = &dataset.demonstrations[demo];
+    let single = Dataset {
+        demonstrations: vec![d.clone()],
+        ..dataset.clone()
+    };
+    let cfg = LearnConfig::default();
+    let knowledge = learn(&single, model, &cfg, &|_| {})
+        .with_context(|| format!("learning from demonstration {}", d.id))?;
+    let t = location_kinds(&single)
+        .iter()
+        .position(|k| *k == d.task.from.kind)
+        .ok_or_else(|| anyhow!("location type {} not in the dataset", d.task.from.kind))?;
+    let Some(field) = knowledge.location_types[t].field.clone() else {
+        bail!(
+            "demonstration {} swept no workspace at {}",
+            d.id,
+            d.task.from.kind
+        );
+    };
+    let (path, dt, base_world) = pick_motion(model, d)?;
+    let location =
+        pose_from_array(d.task.from.pose).ok_or_else(|| anyhow!("{}: bad location pose", d.id))?;
+    let arm_base = location.inverse() * base_world;
+    let rdmp = skills::train(model, &path, dt, &cfg.dmp, cfg.min_manipulability)
+        .map_err(|e| anyhow!("TrainRDMP on {}: {e}", d.id))?;
+    let dmp = PositionDmp::<NA>::train(&cfg.dmp, dt, path.len(), |k| SVector::from(path[k]))
+        .map_err(|e| anyhow!("training the DMP on {}: {e}", d.id))?;
+    let goal = ArmKinematics::new(model, &JointVector::from(path[path.len() - 1])).tcp;
+    let offsets = grid.offsets();
+    let cells: Vec<(f64, f64)> = offsets
+        .iter()
+        .flat_map(|&dy| offsets.iter().map(move |&dx| (dx, dy)))
+        .collect();
+    let view = field.field();
+    let ik = IkConfig::default();
+    let home = JointVector::from(model.home);
+    let goals = cells
+        .par_iter()
+        .map(|&(dx, dy)| {
+            let g = Pose::from_parts(
+                Translation3::from(goal.translation.vector + Vector3::new(dx, dy, 0.0)),
+                goal.rotation,
+            );
+            let reachable = solutions(model, &g, &home, &ik).is_ok();
+            let rdmp = rdmp_trajectory(model, &rdmp, &g, &view, &arm_base);
+            let dmp = (!matches!(rdmp.ending, Ending::Failed(_)))
+                .then(|| dmp_trajectory(model, &dmp, &rdmp.end, &view, &arm_base));
+            GoalOutcome {
+                dx,
+                dy,
+                reachable,
+                rdmp,
+                dmp,
+            }
+        })
+        .collect();
+    Ok(ApproachResult {
+        name: name.to_string(),
+        label: label.to_string(),
+        demo: path,
+        dt,
+        goal,
+        arm_base,
+        field,
+        goals,
+        grid,
+    })
+}
+
+/// Depth inside Ω+ (−sdf where negative, else 0) on the horizontal plane through the
+/// demonstrated goal, location frame: (xs, ys, values) over the field's extent, `n` per side.
+pub fn workspace_slice(r: &ApproachResult, n: usize) -> (Vec<f64>, Vec<f64>, Vec<Option<f64>>) {
+    let f = r.field.field();
+    let [nx, ny, _] = f.dims();
+    let lo = f.node_position(0, 0, 0);
+    let hi = f.node_position(nx - 1, ny - 1, 0);
+    let z = (r.arm_base * r.goal).translation.z;
+    let axis = |a: f64, b: f64| -> Vec<f64> {
+        (0..n)
+            .map(|i| a + (b - a) * (i as f64 + 0.5) / n as f64)
+            .collect()
+    };
+    let (xs, ys) = (axis(lo.x, hi.x), axis(lo.y, hi.y));
+    let values = ys
+        .iter()
+        .flat_map(|&y| xs.iter().map(move |&x| (x, y)))
+        .map(|(x, y)| Some((-f.distance(&Vector3::new(x, y, z))).max(0.0)))
+        .collect();
+    (xs, ys, values)
+}
+
+/// The whole experiment on `world`: generates the approaches' demonstrations (planner seed
+/// `seed`) and runs each; `progress` is told of every approach done.
+pub fn experiment(
+    world: &World,
+    grid: GoalGrid,
+    seed: u64,
+    progress: prf_files::OnProgress<'_>,
+) -> Result<Vec<ApproachResult>> {
+    let model = RobotModel::kmr_iiwa14();
+    let list = approaches(world);
+    let selection: Vec<AffordedTask> = list.iter().map(|a| a.task).collect();
+    let dataset = prf_sim::demogen::generate_dataset(world, &selection, seed, 100.0, &|_| {})?;
+    progress(prf_files::Progress::Total(list.len() as u64));
+    list.iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let r = run_approach(&model, &dataset, i, &a.name, &world.label(&a.task), grid);
+            progress(prf_files::Progress::Done(1));
+            r
+        })
+        .collect()
+}
