@@ -13,6 +13,7 @@ use prf_shared::motion::{CLASSES, Frame, Instance, MotionClass, TaskLocation};
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::{Pose, pose_from_array};
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Settings of Learn.
@@ -95,7 +96,7 @@ pub struct Lesson {
     part_type: usize,
     affordance: Option<(Frame, Pose)>,
     /// The instance's robot spheres in the location frame, in sweep order.
-    sweep: Option<Vec<PathSphere>>,
+    sweep: Option<Arc<Vec<PathSphere>>>,
     arm: Option<(Vec<[f64; 7]>, f64, prf_shared::rdmp::Rdmp)>,
 }
 
@@ -232,12 +233,12 @@ fn lessons(
                             .map(|s| s.arm)
                             .collect();
                         let base = loc.inverse() * arm_base_pose(model, s.base);
-                        Some(Sweep::path_spheres(
+                        Some(Arc::new(Sweep::path_spheres(
                             model,
                             &base,
                             &path,
                             cfg.workspace.resample,
-                        ))
+                        )))
                     }
                     _ => None,
                 }
@@ -351,9 +352,9 @@ pub fn learn(
 }
 
 /// Learn (Alg. 3) one demonstration at a time: the state after the demonstrations added so
-/// far. Adding a demonstration merges its [`Lessons`] (affordances, skills, its spheres into
-/// the sweeps of the location types it touches); [`Learner::knowledge`] rebuilds only the
-/// fields of the location types touched since the last call. Adding in dataset order gives
+/// far. Adding a demonstration merges its [`Lessons`] (affordances, skills) and queues its
+/// spheres for the location types it touches; [`Learner::knowledge`] adds them to those types'
+/// sweeps and rebuilds only their fields, one type per thread. Adding in dataset order gives
 /// exactly what [`learn`] gives on the dataset ([`learn`] is this, in one pass).
 #[derive(Clone, Debug)]
 pub struct Learner {
@@ -366,8 +367,8 @@ pub struct Learner {
     location_types: Vec<LocationTypeKnowledge>,
     part_types: Vec<PartTypeKnowledge>,
     sweeps: Vec<Sweep>,
-    /// Location types whose field is out of date.
-    stale: Vec<bool>,
+    /// Per location type, the spheres added since the last field build, in order.
+    pending: Vec<Vec<Arc<Vec<PathSphere>>>>,
     arms: Vec<ArmSkill>,
     /// K before share().
     skills: Vec<Skill>,
@@ -411,7 +412,7 @@ impl Learner {
                 })
                 .collect(),
             sweeps: vec![Sweep::new(config.workspace.feature_spacing); location_kinds.len()],
-            stale: vec![false; location_kinds.len()],
+            pending: vec![Vec::new(); location_kinds.len()],
             location_kinds,
             part_kinds,
             arms: Vec::new(),
@@ -436,7 +437,8 @@ impl Learner {
         })
     }
 
-    /// Merges a demonstration's lessons (Alg. 3 lines 9, 11, 13–16).
+    /// Merges a demonstration's lessons (Alg. 3 lines 9, 13–16) and queues its swept spheres
+    /// (line 11) for [`Learner::knowledge`].
     pub fn add(&mut self, lessons: &Lessons) {
         self.demonstrations += 1;
         for l in &lessons.lessons {
@@ -456,8 +458,7 @@ impl Learner {
             // Line 11: Ω+ of the workspace frame.
             if let (Some(spheres), Some(t)) = (&l.sweep, l.location_type) {
                 self.location_types[t].instances += 1;
-                self.sweeps[t].add_spheres(&self.robot, spheres);
-                self.stale[t] = true;
+                self.pending[t].push(spheres.clone());
             }
             // Lines 13–16: the skill (a set: equal arm motions are stored once).
             let rdmp = l.arm.as_ref().map(|(path, dt, rdmp)| {
@@ -506,14 +507,18 @@ impl Learner {
     /// the location types touched since the last call are rebuilt (in parallel; `progress`
     /// is told of each), the others kept.
     pub fn knowledge(&mut self, progress: OnProgress<'_>) -> Knowledge {
-        let wc = self.config.workspace;
-        let stale = &self.stale;
+        let (wc, robot) = (self.config.workspace, &self.robot);
+        // Per touched type, in parallel: its new spheres in order, then the field.
         let rebuilt: Vec<(usize, Option<LearnedField>)> = self
             .sweeps
             .par_iter_mut()
+            .zip(self.pending.par_iter_mut())
             .enumerate()
-            .filter(|(t, _)| stale[*t])
-            .map(|(t, sweep)| {
+            .filter(|(_, (_, pending))| !pending.is_empty())
+            .map(|(t, (sweep, pending))| {
+                for spheres in pending.drain(..) {
+                    sweep.add_spheres(robot, &spheres);
+                }
                 let f = workspace::build_field(sweep, &wc);
                 progress(Progress::Done(1));
                 (t, f)
@@ -521,7 +526,6 @@ impl Learner {
             .collect();
         for (t, f) in rebuilt {
             self.location_types[t].field = f;
-            self.stale[t] = false;
         }
         let mut skill_set = self.skills.clone();
         // Line 20: K ← share(K).
