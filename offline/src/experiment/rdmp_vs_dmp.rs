@@ -19,7 +19,7 @@ use prf_learn::{LearnConfig, learn, skills};
 use prf_shared::dmp::PositionDmp;
 use prf_shared::field::DistanceField;
 use prf_shared::kinematics::{ArmKinematics, arm_base_pose};
-use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpRun};
+use prf_shared::rdmp::{Rdmp, RdmpConfig, integrate};
 use prf_shared::risk::RiskAccumulator;
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::{Pose, pose_from_array};
@@ -237,15 +237,57 @@ pub fn elbow_x(model: &RobotModel, q: &JointVector) -> f64 {
         .x
 }
 
-/// Risk of configuration `q` added to `acc`.
-fn add_risk(
-    acc: &mut RiskAccumulator,
-    model: &RobotModel,
-    field: &impl DistanceField,
-    arm_base: &Pose,
-    q: &JointVector,
-) {
-    acc.add(model, field, arm_base, &ArmKinematics::new(model, q));
+/// Rates a trajectory one configuration at a time: its risk in Ω+ and its elbow trace, from
+/// one forward kinematics per configuration.
+struct Rater<'a, F> {
+    model: &'a RobotModel,
+    field: &'a F,
+    arm_base: &'a Pose,
+    acc: RiskAccumulator,
+    elbow: Vec<(f64, f64)>,
+}
+
+impl<'a, F: DistanceField> Rater<'a, F> {
+    fn new(model: &'a RobotModel, field: &'a F, arm_base: &'a Pose) -> Self {
+        Rater {
+            model,
+            field,
+            arm_base,
+            acc: RiskAccumulator::default(),
+            elbow: Vec::new(),
+        }
+    }
+
+    /// Adds configuration `q` at step `k` (time k·Δt).
+    fn add(&mut self, k: usize, q: &JointVector) {
+        let kin = ArmKinematics::new(self.model, q);
+        self.acc.add(self.model, self.field, self.arm_base, &kin);
+        if k.is_multiple_of(TRACE_EVERY) {
+            let dt = RdmpConfig::default().dt;
+            self.elbow
+                .push((k as f64 * dt, kin.frames[ELBOW_LINK].translation.x));
+        }
+    }
+
+    /// The trajectory that ended at `end` as `ending`.
+    fn finish(self, ending: Ending, end: [f64; NA]) -> Trajectory {
+        Trajectory {
+            ending,
+            risk: self.acc.risk(),
+            end,
+            elbow: self.elbow,
+        }
+    }
+}
+
+/// A trajectory that could not be integrated.
+fn failed(model: &RobotModel, why: String) -> Trajectory {
+    Trajectory {
+        ending: Ending::Failed(why),
+        risk: f64::NAN,
+        end: model.home,
+        elbow: Vec::new(),
+    }
 }
 
 /// IntegrateRDMP from q_a,H to `goal`, with its risk and elbow trace.
@@ -256,47 +298,24 @@ fn rdmp_trajectory(
     field: &impl DistanceField,
     arm_base: &Pose,
 ) -> Trajectory {
-    let cfg = RdmpConfig::default();
     let q0 = JointVector::from(model.home);
-    let mut acc = RiskAccumulator::default();
-    add_risk(&mut acc, model, field, arm_base, &q0);
-    let mut elbow = vec![(0.0, elbow_x(model, &q0))];
-    let failed = |e: String| Trajectory {
-        ending: Ending::Failed(e),
-        risk: f64::NAN,
-        end: model.home,
-        elbow: Vec::new(),
+    let mut rater = Rater::new(model, field, arm_base);
+    rater.add(0, &q0);
+    let q = match integrate(model, rdmp, &q0, goal, &RdmpConfig::default(), |s| {
+        rater.add(s.step, &s.q)
+    }) {
+        Ok(q) => q,
+        Err(e) => return failed(model, e.to_string()),
     };
-    let mut run = match RdmpRun::new(model, rdmp, &q0, goal, &cfg) {
-        Ok(r) => r,
-        Err(e) => return failed(e.to_string()),
-    };
-    let mut k = 0;
-    while !run.finished() {
-        let step = match run.step(model, rdmp, &cfg) {
-            Ok(s) => s,
-            Err(e) => return failed(e.to_string()),
-        };
-        k += 1;
-        add_risk(&mut acc, model, field, arm_base, &step.q);
-        if k % TRACE_EVERY == 0 {
-            elbow.push((k as f64 * cfg.dt, elbow_x(model, &step.q)));
-        }
-    }
-    let q = *run.q();
     let tcp = ArmKinematics::new(model, &q).tcp;
     let position = (tcp.translation.vector - goal.translation.vector).norm();
     let angle = tcp.rotation.angle_to(&goal.rotation);
-    Trajectory {
-        ending: if position <= REACH_POSITION && angle <= REACH_ANGLE {
-            Ending::Reached
-        } else {
-            Ending::Missed { position, angle }
-        },
-        risk: acc.risk(),
-        end: q.into(),
-        elbow,
-    }
+    let ending = if position <= REACH_POSITION && angle <= REACH_ANGLE {
+        Ending::Reached
+    } else {
+        Ending::Missed { position, angle }
+    };
+    rater.finish(ending, q.into())
 }
 
 /// The joint-space DMP from q_a,H to `end`, with its risk and elbow trace.
@@ -311,37 +330,22 @@ fn dmp_trajectory(
     let (y0, goal) = (SVector::from(model.home), SVector::from(*end));
     let (mut state, mut phase) = match dmp.start(&y0, &goal, dt) {
         Ok(s) => s,
-        Err(e) => {
-            return Trajectory {
-                ending: Ending::Failed(e.to_string()),
-                risk: f64::NAN,
-                end: model.home,
-                elbow: Vec::new(),
-            };
-        }
+        Err(e) => return failed(model, e.to_string()),
     };
-    let mut acc = RiskAccumulator::default();
-    add_risk(&mut acc, model, field, arm_base, &state.y);
-    let mut elbow = vec![(0.0, elbow_x(model, &state.y))];
+    let mut rater = Rater::new(model, field, arm_base);
+    rater.add(0, &state.y);
     while !phase.finished() {
         state.step(&dmp.params, &dmp.forcing, dmp.tau, dt, &phase);
         phase.advance();
-        add_risk(&mut acc, model, field, arm_base, &state.y);
-        if phase.step % TRACE_EVERY == 0 {
-            elbow.push((phase.step as f64 * dt, elbow_x(model, &state.y)));
-        }
+        rater.add(phase.step, &state.y);
     }
     let miss = (state.y - goal).amax();
-    Trajectory {
-        ending: if miss <= DMP_REACH {
-            Ending::Reached
-        } else {
-            Ending::MissedJoints { error: miss }
-        },
-        risk: acc.risk(),
-        end: state.y.into(),
-        elbow,
-    }
+    let ending = if miss <= DMP_REACH {
+        Ending::Reached
+    } else {
+        Ending::MissedJoints { error: miss }
+    };
+    rater.finish(ending, state.y.into())
 }
 
 /// The Pick arm motion of a demonstration: its forward samples and the arm base (world) at

@@ -75,7 +75,7 @@ const MAX_PROBES: usize = 8;
 const MAX_STREAM_BYTES: usize = 768 << 20;
 
 /// A pose's bits.
-fn bits(p: &prf_shared::se3::Pose) -> [u64; 7] {
+fn bits(p: &Pose) -> [u64; 7] {
     prf_shared::se3::pose_to_array(p).map(f64::to_bits)
 }
 
