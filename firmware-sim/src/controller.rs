@@ -1,6 +1,8 @@
 //! The controller process: a 1 kHz cycle synchronous with the cell's setpoints. Each setpoint
 //! (woken by its event) advances the plant by one cycle towards it; when a cycle passes with
-//! none, the reference coasts at its last velocity, and after `watchdog_cycles` silent cycles
+//! none, the reference coasts at its last velocity. Setpoints that arrive late, for cycles the
+//! reference already coasted through, replace that extrapolation without a further cycle, so
+//! the plant never runs ahead of the wall clock. After `watchdog_cycles` silent cycles
 //! the arm and the platform brake to standstill with Ruckig. Every cycle publishes the
 //! measured state. A refused setpoint also brakes; the next session (flag FIRST) clears it.
 
@@ -95,6 +97,9 @@ struct Plant {
     braked: bool,
     limits: MotionLimits,
     gripper_rate: f64,
+    /// Cycles the reference has coasted past the newest setpoint: the setpoints for them are
+    /// late, and each that comes takes the place of one coasted cycle.
+    lag: u32,
 }
 
 impl Plant {
@@ -117,15 +122,21 @@ impl Plant {
             braked: false,
             limits,
             gripper_rate: 1.0 / cfg.gripper_time.max(1e-3),
+            lag: 0,
         }
     }
 
-    /// Takes a setpoint as the new reference.
-    fn follow(&mut self, sp: &SetpointMsg) {
+    /// Takes a setpoint as the new reference. Returns whether it is on time (the plant steps
+    /// towards it); a late one, for a cycle the reference coasted through, only replaces the
+    /// extrapolation: the reference becomes the setpoint coasted over the cycles still lagging.
+    fn follow(&mut self, sp: &SetpointMsg) -> bool {
+        let on_time = self.lag == 0;
+        self.lag = self.lag.saturating_sub(1);
+        let ahead = self.lag as f64 * DT;
         for j in 0..NA {
             self.qdd_ref[j] = (sp.qd[j] - self.qd_ref[j]) / DT;
+            self.q_ref[j] = sp.q[j] + sp.qd[j] * ahead;
         }
-        self.q_ref = sp.q;
         self.qd_ref = sp.qd;
         self.close = sp.flags & flags::GRIPPER_CLOSE != 0;
         if sp.base_goal != self.base_goal {
@@ -133,6 +144,7 @@ impl Plant {
             let holding = self.holding();
             self.platform.go_to(sp.base_goal, &self.servo.q, holding);
         }
+        on_time
     }
 
     /// No setpoint this cycle: the reference coasts at its velocity.
@@ -141,6 +153,7 @@ impl Plant {
             self.q_ref[j] += self.qd_ref[j] * DT;
         }
         self.qdd_ref = [0.0; NA];
+        self.lag += 1;
     }
 
     /// Starts braking arm and platform from the current reference.
@@ -212,12 +225,19 @@ pub struct Summary {
     pub min_drive_clearance: f64,
 }
 
+/// How long past one period after a late setpoint the controller waits for the next one
+/// before it coasts again: a fifth of a period, so that the cycle locks onto arrivals.
+const RELOCK_GRACE: Duration = Duration::from_micros(200);
+
 /// What a setpoint did.
 enum Flow {
     /// The plant stepped and the state was published.
     Stepped,
-    /// A repeated setpoint, ignored.
+    /// A repeated setpoint, ignored, or a late one that took the place of a coasted cycle.
     Skipped,
+    /// A late setpoint that brought the reference back onto the stream: the next cycle waits
+    /// for the next setpoint (one period and a grace from now) to lock onto arrivals again.
+    CaughtUp,
     /// SHUTDOWN: the controller exits.
     Exit,
 }
@@ -390,23 +410,26 @@ impl<'c> Controller<'c> {
             .guard
             .admit(&sp, &self.plant.q_ref, &self.model, &self.limits, DT);
         self.summary.setpoints += 1;
-        match admission {
+        let step = match admission {
             Admission::Follow if !self.halted => self.plant.follow(&sp),
-            Admission::Follow => {}
+            Admission::Follow => true,
             Admission::Repeated => return Ok(Flow::Skipped),
             Admission::Refuse(r) => {
                 self.event(format_args!("refused setpoint {}: {r}; braking", sp.seq))?;
                 self.halted = true;
                 self.state_bits |= status::REJECTED | status::BRAKING;
                 self.plant.start_brake();
+                true
             }
-        }
-        self.plant.step()?;
+        };
         self.last_sp_seq = sp.seq;
         self.last_latency = latency;
         self.window_latency = self.window_latency.max(latency);
-        self.window_error = self.window_error.max(self.plant.tracking_error());
-        self.publish(sp.seq, latency)?;
+        if step {
+            self.plant.step()?;
+            self.window_error = self.window_error.max(self.plant.tracking_error());
+            self.publish(sp.seq, latency)?;
+        }
         self.last_setpoint = Instant::now();
         if sp.flags & flags::LAST != 0 {
             self.end_session(sp.seq)?;
@@ -414,7 +437,11 @@ impl<'c> Controller<'c> {
         if sp.seq.is_multiple_of(100) {
             self.log_window(sp.seq)?;
         }
-        Ok(Flow::Stepped)
+        Ok(match (step, self.plant.lag) {
+            (true, _) => Flow::Stepped,
+            (false, 0) => Flow::CaughtUp,
+            (false, _) => Flow::Skipped,
+        })
     }
 
     /// A FIRST setpoint: a new session clears a latched halt.
@@ -423,6 +450,7 @@ impl<'c> Controller<'c> {
         self.halted = false;
         self.plant.brake = None;
         self.plant.braked = false;
+        self.plant.lag = 0;
         self.summary.sessions += 1;
         self.state_bits = status::ACTIVE;
         let t = self.t();
@@ -551,7 +579,7 @@ pub fn run(cfg: &Config) -> Result<Summary> {
             .ready
             .try_wait(|_| {})
             .map_err(|e| IpcError::new("listener of the setpoint event", e))?;
-        let mut stepped = false;
+        let (mut stepped, mut caught_up) = (false, false);
         while let Some(sample) = c
             .ports
             .setpoint
@@ -563,12 +591,17 @@ pub fn run(cfg: &Config) -> Result<Summary> {
             match c.on_setpoint(sp)? {
                 Flow::Exit => break 'cycle,
                 Flow::Stepped => stepped = true,
+                Flow::CaughtUp => caught_up = true,
                 Flow::Skipped => {}
             }
         }
         let now = Instant::now();
         if stepped {
             next = now + period;
+            continue;
+        }
+        if caught_up {
+            next = now + period + RELOCK_GRACE;
             continue;
         }
         if now < next {
@@ -589,4 +622,88 @@ pub fn run(cfg: &Config) -> Result<Summary> {
         }
     }
     c.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Cycles of the test stream: every joint moves 0.5 rad rest to rest in 1 s (a quintic),
+    /// then rests for 0.2 s.
+    const CYCLES: usize = 1200;
+    const AMPLITUDE: f64 = 0.5;
+
+    /// The stream's setpoint for cycle `c` (1-based, as `seq`).
+    fn setpoint(home: &[f64; NA], c: usize) -> SetpointMsg {
+        let s = (c as f64 * DT).min(1.0);
+        let pos = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+        let vel = 30.0 * s * s * (1.0 - s) * (1.0 - s);
+        SetpointMsg {
+            seq: c as u64,
+            q: core::array::from_fn(|j| home[j] + AMPLITUDE * pos),
+            qd: [AMPLITUDE * vel; NA],
+            ..SetpointMsg::default()
+        }
+    }
+
+    /// Runs the plant as the controller's loop does, one wall-clock cycle at a time: when the
+    /// setpoints of cycles `stall` have not come by their cycle, the cycle coasts, and they all
+    /// come late, with the setpoint of the cycle after the stall. Returns the measured joint
+    /// positions per cycle and the largest tracking error.
+    fn run(stall: std::ops::Range<usize>) -> (Vec<[f64; NA]>, f64) {
+        let model = RobotModel::kmr_iiwa14();
+        let limits = MotionLimits::kmr_iiwa(&model);
+        let mut plant = Plant::new(&Config::new("test"), &model, limits);
+        let (mut measured, mut worst) = (Vec::new(), 0.0f64);
+        for c in 1..=CYCLES {
+            let stepped = if stall.contains(&c) {
+                plant.coast();
+                false
+            } else {
+                let late = if c == stall.end { stall.clone() } else { c..c };
+                for l in late {
+                    assert!(
+                        !plant.follow(&setpoint(&model.home, l)),
+                        "setpoint {l} is late"
+                    );
+                }
+                plant.follow(&setpoint(&model.home, c))
+            };
+            assert!(stepped || stall.contains(&c), "setpoint {c} is on time");
+            plant.step().unwrap();
+            worst = worst.max(plant.tracking_error());
+            measured.push(plant.servo.q);
+        }
+        (measured, worst)
+    }
+
+    /// A stall of the cell costs the plant no cycle: late setpoints replace the coasted
+    /// reference instead of stepping again, so the arm stays on the wall clock. The tracking
+    /// error grows only by the extrapolation error of the coasted cycles, ½·q̈max·(stall·Δt)²,
+    /// and the arm ends where it ends without the stall.
+    #[test]
+    fn late_setpoints_replace_coasted_cycles() {
+        let (on_time, e0) = run(0..0);
+        let stall = 400..430; // 30 ms at the fastest part of the motion
+        let (stalled, e1) = run(stall.clone());
+        let qdd_max = AMPLITUDE * 10.0 / 3.0f64.sqrt(); // of the quintic over 1 s
+        let extrapolation = 0.5 * qdd_max * (stall.len() as f64 * DT).powi(2);
+        assert!(
+            e1 <= e0 + extrapolation,
+            "tracking error {:.3} mrad on time, {:.3} mrad with the stall (bound {:.3})",
+            e0 * 1e3,
+            e1 * 1e3,
+            (e0 + extrapolation) * 1e3
+        );
+        let (a, b) = (on_time.last().unwrap(), stalled.last().unwrap());
+        for j in 0..NA {
+            assert!(
+                (a[j] - b[j]).abs() < 1e-6,
+                "A{}: {} vs {}",
+                j + 1,
+                a[j],
+                b[j]
+            );
+        }
+    }
 }
