@@ -198,7 +198,8 @@ fn restart_works(cell: &str) {
 
 /// One task end to end: the part ends at its goal pose (from the measured joint states and
 /// the gripper), no setpoint lost or repeated, every setpoint within the limits, tracking
-/// error within 10 mrad (a tenth of the executor's tracking tolerance).
+/// error within 10 mrad (a tenth of the executor's tracking tolerance), no allocation in the
+/// loop.
 #[test]
 fn one_task_end_to_end_places_the_part_at_its_goal() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
@@ -221,6 +222,9 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
         "{r}"
     );
     assert_eq!(r["rejected"], 0, "{r}");
+    // Issue 16: the loop's thread allocates nothing from its first tick to its last
+    // (executor, output stage, iceoryx2 send and receive), counted by `prf run`'s allocator.
+    assert_eq!(r["loop_allocations"], 0, "{r}");
     let track = r["max_tracking_error"].as_f64().unwrap();
     assert!(track <= 1e-2, "tracking error {track} rad");
     // firmware-sim navigates on the example cell's floor map: every drive keeps r = 30 mm

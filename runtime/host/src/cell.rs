@@ -275,6 +275,7 @@ impl Cell {
         let mut asked = None;
         let mut seen_sp = 0u64;
         let stop_ticks = self.cfg.stop_after.map(|d| d.as_millis() as u64);
+        self.ports.connect()?;
         let mut ticker = Ticker::every(period);
         let probe = self.cfg.alloc_probe;
         let allocations_before = probe.map(|f| f());

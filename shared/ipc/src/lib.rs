@@ -6,6 +6,7 @@
 pub mod clock;
 pub mod link;
 pub mod messages;
+pub mod recycled;
 
 pub use clock::now_ns;
 pub use messages::{JointStateMsg, SetpointMsg, flags, mode, status};

@@ -36,8 +36,9 @@ impl IpcError {
 /// The result of an IPC operation.
 pub type Result<T> = core::result::Result<T, IpcError>;
 
-/// Inter-process service of iceoryx2 (POSIX shared memory).
-pub type Ipc = ipc::Service;
+/// Inter-process service of iceoryx2 (POSIX shared memory), allocating nothing per sample
+/// ([`crate::recycled`]).
+pub type Ipc = crate::recycled::Service;
 
 /// Subscriber queue depth: up to 1 s of 1 kHz messages for an observer that polls slowly.
 pub const QUEUE: usize = 1024;
@@ -168,15 +169,39 @@ pub struct CellPorts {
 }
 
 impl CellPorts {
+    /// Opens the ports; one sample loaned and returned leaves its memory for the first
+    /// tick's loan ([`crate::recycled`]), so sending allocates nothing from the first tick on.
     pub fn open(node: &Node<Ipc>, cell: &str) -> Result<Self> {
+        let setpoint = publisher(node, cell, "setpoint")?;
+        drop(
+            setpoint
+                .loan_uninit()
+                .map_err(|e| IpcError::new("loan", e))?,
+        );
         Ok(CellPorts {
-            setpoint: publisher(node, cell, "setpoint")?,
+            setpoint,
             ready: event(node, cell)?
                 .notifier_builder()
                 .create()
                 .map_err(|e| IpcError::new(format!("notifier of prf/{cell}/setpoint-ready"), e))?,
             joint_state: subscriber(node, cell, "joint-state")?,
         })
+    }
+
+    /// Connects the ports to the peers present now (iceoryx2 otherwise connects lazily, with
+    /// allocations, on the first send or receive); call before a real-time loop.
+    pub fn connect(&self) -> Result<()> {
+        use iceoryx2::port::update_connections::UpdateConnections;
+        let fail = |what: &str, e| IpcError::new(format!("connect the {what}"), e);
+        self.setpoint
+            .update_connections()
+            .map_err(|e| fail("setpoint publisher", e))?;
+        self.ready
+            .update_connections()
+            .map_err(|e| fail("setpoint-ready notifier", e))?;
+        self.joint_state
+            .update_connections()
+            .map_err(|e| fail("joint-state subscriber", e))
     }
 
     /// Sends one setpoint and wakes the controller.
