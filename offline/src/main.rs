@@ -6,8 +6,8 @@ mod synthetic;
 
 use clap::{Parser, Subcommand};
 use cli::{
-    check_dataset, demo, envelope, experiment, firmware, generate, inspect, learn, plan, rdmp_demo,
-    run,
+    check_dataset, demo, envelope, experiment, firmware, generate, import_bag, inspect, learn,
+    plan, rdmp_demo, run,
 };
 
 #[global_allocator]
@@ -40,6 +40,9 @@ enum Command {
     /// Validate a dataset directory (format, ids, time, limits); with `--world`, re-check every
     /// program against the ground-truth cell.
     CheckDataset(check_dataset::Args),
+    /// Import a ROS 2 bag (MCAP, CDR: JointState, Odometry or /tf) with a task annotation as a
+    /// dataset, resampled onto each program's clock.
+    ImportBag(import_bag::Args),
     /// Learn affordances, workspaces and skills from a dataset (Alg. 3) and compile the blob.
     Learn(learn::Args),
     /// Validate a blob and print its contents and size by section.
@@ -79,6 +82,7 @@ fn main() -> anyhow::Result<()> {
         Some(Command::Bench(args)) => bench::math::run(&args),
         Some(Command::Gen(args)) => generate::run(&args),
         Some(Command::CheckDataset(args)) => check_dataset::run(&args),
+        Some(Command::ImportBag(args)) => import_bag::run(&args),
         Some(Command::Learn(args)) => learn::run(&args),
         Some(Command::Inspect(args)) => inspect::run(&args),
         Some(Command::Plan(args)) => plan::run(&args),

@@ -88,18 +88,25 @@ fn pose(o: &urdf_rs::Pose) -> Pose {
     pose_from_xyz_rpy(o.xyz.0, o.rpy.0)
 }
 
-/// The model described by URDF text and sphere-file text (`urdf_name`, `spheres_name` name
-/// the sources in errors).
-pub fn parse(
-    urdf: &str,
-    urdf_name: &str,
-    spheres: &str,
-    spheres_name: &str,
-) -> Result<RobotModel, RobotFileError> {
-    let robot = urdf_rs::read_from_string(urdf).map_err(|source| RobotFileError::Urdf {
+fn read_urdf(urdf: &str, urdf_name: &str) -> Result<urdf_rs::Robot, RobotFileError> {
+    urdf_rs::read_from_string(urdf).map_err(|source| RobotFileError::Urdf {
         file: urdf_name.to_string(),
         source,
-    })?;
+    })
+}
+
+/// A URDF's root link, its one chain of joints from there, and the indices in it of the
+/// arm's [`NA`] consecutive revolute joints.
+struct ArmChain<'a> {
+    root: &'a urdf_rs::Link,
+    chain: Vec<&'a urdf_rs::Joint>,
+    revolute: Vec<usize>,
+}
+
+fn arm_chain<'a>(
+    robot: &'a urdf_rs::Robot,
+    urdf_name: &str,
+) -> Result<ArmChain<'a>, RobotFileError> {
     let children: Vec<&str> = robot.joints.iter().map(|j| j.child.link.as_str()).collect();
     let roots: Vec<&urdf_rs::Link> = robot
         .links
@@ -147,10 +154,43 @@ pub fn parse(
             revolute.len()
         );
     }
-    let (first, last) = (revolute[0], revolute[NA - 1]);
     if revolute.windows(2).any(|w| w[1] != w[0] + 1) {
         invalid!("{urdf_name}: fixed joints between the arm's revolute joints are not supported");
     }
+    Ok(ArmChain {
+        root,
+        chain,
+        revolute,
+    })
+}
+
+/// The names of the arm's joints A1 … A7 in a URDF, in chain order (how recorded joint states
+/// name them).
+pub fn arm_joint_names(urdf: &str, urdf_name: &str) -> Result<Vec<String>, RobotFileError> {
+    let robot = read_urdf(urdf, urdf_name)?;
+    let arm = arm_chain(&robot, urdf_name)?;
+    Ok(arm
+        .revolute
+        .iter()
+        .map(|&i| arm.chain[i].name.clone())
+        .collect())
+}
+
+/// The model described by URDF text and sphere-file text (`urdf_name`, `spheres_name` name
+/// the sources in errors).
+pub fn parse(
+    urdf: &str,
+    urdf_name: &str,
+    spheres: &str,
+    spheres_name: &str,
+) -> Result<RobotModel, RobotFileError> {
+    let robot = read_urdf(urdf, urdf_name)?;
+    let ArmChain {
+        root,
+        chain,
+        revolute,
+    } = arm_chain(&robot, urdf_name)?;
+    let (first, last) = (revolute[0], revolute[NA - 1]);
     let mount = chain[..first]
         .iter()
         .fold(Pose::identity(), |p, j| p * pose(&j.origin));

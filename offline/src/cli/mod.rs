@@ -10,6 +10,7 @@ pub mod envelope;
 pub mod experiment;
 pub mod firmware;
 pub mod generate;
+pub mod import_bag;
 pub mod inspect;
 pub mod learn;
 pub mod plan;
