@@ -1,10 +1,16 @@
 #!/usr/bin/env bash
-# Dev-only: writes a prf dataset as a ROS 2 bag (MCAP + task annotation) with Foxglove's Python
-# `mcap` and `mcap-ros2-support`, an encoder independent of the project's reader, for
-# `prf import-bag`'s tests. Sets up its own virtual environment (installing python3-venv when
-# missing). Usage: scripts/bag-fixture.sh DATASET_DIR OUT_DIR
+# Dev-only, for the ROS 2 bag tests: Foxglove's Python `mcap` and `mcap-ros2-support`, a CDR
+# encoder and decoder independent of the project's.
+#   scripts/bag-fixture.sh make DATASET_DIR OUT_DIR   a prf dataset as a bag + task annotation
+#   scripts/bag-fixture.sh read BAG.mcap              a bag's messages, decoded, as JSON
+# Sets up its own virtual environment (installing python3-venv when missing).
 set -euo pipefail
-[ $# -eq 2 ] || { echo "usage: $0 DATASET_DIR OUT_DIR" >&2; exit 2; }
+usage() { echo "usage: $0 make DATASET_DIR OUT_DIR | read BAG.mcap" >&2; exit 2; }
+case ${1:-} in
+  make) [ $# -eq 3 ] || usage ;;
+  read) [ $# -eq 2 ] || usage ;;
+  *) usage ;;
+esac
 root="$(cd "$(dirname "$0")/.." && pwd)"
 venv="$root/target/py-bag-fixture"
 if [ ! -x "$venv/bin/python" ]; then
@@ -18,4 +24,7 @@ if [ ! -x "$venv/bin/python" ]; then
   "$venv/bin/pip" install -q --disable-pip-version-check mcap==1.6.0 mcap-ros2-support==0.6.0 \
     PyYAML==6.0.4 zstandard==0.25.0 lz4==4.4.5
 fi
-exec "$venv/bin/python" "$root/tools/bag-fixture/make_bag.py" "$1" "$2"
+if [ "$1" = make ]; then
+  exec "$venv/bin/python" "$root/tools/bag-fixture/make_bag.py" "$2" "$3"
+fi
+exec "$venv/bin/python" "$root/tools/bag-fixture/read_mcap.py" "$2"

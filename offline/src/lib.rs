@@ -5,5 +5,6 @@
 
 pub mod envelope;
 pub mod experiment;
+pub mod export_mcap;
 pub mod firmware;
 pub mod plots;

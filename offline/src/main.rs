@@ -6,8 +6,8 @@ mod synthetic;
 
 use clap::{Parser, Subcommand};
 use cli::{
-    check_dataset, demo, envelope, experiment, firmware, generate, import_bag, inspect, learn,
-    plan, rdmp_demo, run,
+    check_dataset, demo, envelope, experiment, export_mcap, firmware, generate, import_bag,
+    inspect, learn, plan, rdmp_demo, run,
 };
 
 #[global_allocator]
@@ -43,6 +43,10 @@ enum Command {
     /// Import a ROS 2 bag (MCAP, CDR: JointState, Odometry or /tf) with a task annotation as a
     /// dataset, resampled onto each program's clock.
     ImportBag(import_bag::Args),
+    /// Write a dataset or a blob's knowledge as a ROS 2 bag (MCAP) for Foxglove or rerun:
+    /// robot description, joint states, /tf, workspaces as point clouds, obstacles, parts and
+    /// stances as markers (`prf plan --mcap` writes a planned program with its risk).
+    ExportMcap(export_mcap::Args),
     /// Learn affordances, workspaces and skills from a dataset (Alg. 3) and compile the blob.
     Learn(learn::Args),
     /// Validate a blob and print its contents and size by section.
@@ -83,6 +87,7 @@ fn main() -> anyhow::Result<()> {
         Some(Command::Gen(args)) => generate::run(&args),
         Some(Command::CheckDataset(args)) => check_dataset::run(&args),
         Some(Command::ImportBag(args)) => import_bag::run(&args),
+        Some(Command::ExportMcap(args)) => export_mcap::run(&args),
         Some(Command::Learn(args)) => learn::run(&args),
         Some(Command::Inspect(args)) => inspect::run(&args),
         Some(Command::Plan(args)) => plan::run(&args),

@@ -164,16 +164,27 @@ fn arm_chain<'a>(
     })
 }
 
-/// The names of the arm's joints A1 … A7 in a URDF, in chain order (how recorded joint states
-/// name them).
-pub fn arm_joint_names(urdf: &str, urdf_name: &str) -> Result<Vec<String>, RobotFileError> {
+/// The names a URDF gives the robot's frames and joints, as ROS messages use them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainNames {
+    /// The root link: the platform frame that `/tf` places in the world.
+    pub root_link: String,
+    /// The arm's joints A1 … A7, in chain order (as joint states name them).
+    pub arm_joints: Vec<String>,
+}
+
+/// The frame and joint names of a URDF.
+pub fn chain_names(urdf: &str, urdf_name: &str) -> Result<ChainNames, RobotFileError> {
     let robot = read_urdf(urdf, urdf_name)?;
     let arm = arm_chain(&robot, urdf_name)?;
-    Ok(arm
-        .revolute
-        .iter()
-        .map(|&i| arm.chain[i].name.clone())
-        .collect())
+    Ok(ChainNames {
+        root_link: arm.root.name.clone(),
+        arm_joints: arm
+            .revolute
+            .iter()
+            .map(|&i| arm.chain[i].name.clone())
+            .collect(),
+    })
 }
 
 /// The model described by URDF text and sphere-file text (`urdf_name`, `spheres_name` name

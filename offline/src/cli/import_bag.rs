@@ -57,12 +57,12 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         (Some(u), Some(s)) => {
             let text = std::fs::read_to_string(u)
                 .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", u.display()))?;
-            let arm = robot::arm_joint_names(&text, &u.display().to_string())?;
+            let arm = robot::chain_names(&text, &u.display().to_string())?.arm_joints;
             (robot::load(u, s)?, arm)
         }
         _ => (
             robot::example()?,
-            robot::arm_joint_names(robot::EXAMPLE_URDF, "offline/data/kmr_iiwa14.urdf")?,
+            robot::chain_names(robot::EXAMPLE_URDF, "offline/data/kmr_iiwa14.urdf")?.arm_joints,
         ),
     };
     let cfg = BagConfig {

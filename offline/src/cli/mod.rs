@@ -8,6 +8,7 @@ pub mod child;
 pub mod demo;
 pub mod envelope;
 pub mod experiment;
+pub mod export_mcap;
 pub mod firmware;
 pub mod generate;
 pub mod import_bag;

@@ -14,7 +14,7 @@ use prf_sim::navigation::{PartTracker, drive_phases, execute_navigating, part_si
 use prf_sim::tasks::{FloorTask, world_tasks};
 use prf_sim::world::World;
 use prf_sim::world::geometry::Cell;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
@@ -25,12 +25,22 @@ pub struct Args {
     #[command(flatten)]
     pub task: TaskArgs,
     /// Plan every task of the floor plan (18 in the example cell) and print a table.
-    #[arg(long, conflicts_with_all = ["part", "from", "to", "export"])]
+    #[arg(long, conflicts_with_all = ["part", "from", "to", "export", "mcap"])]
     pub all: bool,
     /// Write the program at 1 kHz, executed on an ideal cell (the arm exact, the platform
     /// navigating on the world's floor map), as a dataset trajectory CSV.
     #[arg(long)]
     pub export: Option<PathBuf>,
+    /// Write the executed program as a ROS 2 bag (MCAP) for Foxglove or rerun: the robot
+    /// description, joint states, the platform on /tf, the locations, both workspaces as point
+    /// clouds, the obstacles and the part as markers, the gripper and the risk along the
+    /// program (see `prf export-mcap --help`).
+    #[arg(long)]
+    pub mcap: Option<PathBuf>,
+    /// Rate of the bag's joint states and transforms, Hz (the program runs at 1 kHz; the
+    /// risk is the largest of each interval).
+    #[arg(long, default_value_t = 100.0)]
+    pub mcap_rate: f64,
     /// Write the task as a task block (for the cell-controller firmware: flash it at the TASK
     /// region, 0x003F0000 on mps2-an500).
     #[arg(long, conflicts_with = "all")]
@@ -118,24 +128,37 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     };
     print_plan(&rt, &ft, &p, took)?;
-    if let Some(path) = &a.export {
+    if a.export.is_some() || a.mcap.is_some() {
         let Some(program) = &p.program else {
             bail!("no program to export: no skill integrates for this task");
         };
-        export(&world, &rt, &ft, program, path)?;
+        let samples = execute(&world, &rt, &ft, program)?;
+        if let Some(path) = &a.export {
+            std::fs::write(path, trajectory_csv(&samples))
+                .with_context(|| format!("writing {}", path.display()))?;
+            println!(
+                "program: {:.2} s at 1 kHz on an ideal cell (arm exact, platform navigating on the floor map keeping {:.0} mm) ({} samples) written to {}",
+                samples.len() as f64 * 1e-3,
+                world.clearance.acceptable * 1e3,
+                samples.len(),
+                path.display()
+            );
+        }
+        if let Some(path) = &a.mcap {
+            crate::cli::export_mcap::program(&world, &rt, &ft, &p, &samples, a.mcap_rate, path)?;
+        }
     }
     Ok(())
 }
 
 /// Runs `program` on the ideal cell whose platform navigates on `world`'s floor map, prints
-/// each drive's corners and clearances, and writes the trajectory CSV.
-fn export(
+/// each drive's corners and clearances; the samples at 1 kHz.
+fn execute(
     world: &World,
     rt: &Runtime<'_>,
     ft: &FloorTask,
     program: &Program,
-    path: &Path,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<Vec<prf_files::dataset::Sample>> {
     let (run, drives) = execute_navigating(world, rt, program, ft, 10_000_000)
         .with_context(|| format!("task {}", ft.label()))?;
     if let Some(f) = run.fault {
@@ -160,16 +183,7 @@ fn export(
             }
         );
     }
-    std::fs::write(path, trajectory_csv(&run.samples))
-        .with_context(|| format!("writing {}", path.display()))?;
-    println!(
-        "program: {:.2} s at 1 kHz on an ideal cell (arm exact, platform navigating on the floor map keeping {:.0} mm) ({} samples) written to {}",
-        run.samples.len() as f64 * 1e-3,
-        world.clearance.acceptable * 1e3,
-        run.samples.len(),
-        path.display()
-    );
-    Ok(())
+    Ok(run.samples)
 }
 
 /// "stance 0 (x 1.20 m, y −0.85 m, yaw 90.0°)".

@@ -8,6 +8,7 @@
 //! [`BagError`] naming the topic, the time and the value at fault.
 
 pub mod messages;
+pub mod write;
 
 use crate::dataset::{Dataset, Demonstration, Instance, Sample, TaskRecord};
 use byteorder::{BigEndian, LittleEndian};

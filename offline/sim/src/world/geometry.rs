@@ -67,6 +67,11 @@ impl Obstacle {
         box_signed_distance(&self.to_local(p), &self.half)
     }
 
+    /// The box as (centre, yaw about z, half extents), world frame.
+    pub fn cuboid(&self) -> (Vector3<f64>, f64, Vector3<f64>) {
+        (self.centre, self.sin.atan2(self.cos), self.half)
+    }
+
     /// Radius of the sphere about the centre that contains the box (for culling).
     fn bounding_radius(&self) -> f64 {
         self.half.norm()

@@ -1,7 +1,9 @@
-//! `prf import-bag` (issue 19): a ROS 2 bag written by an independent encoder (Foxglove's
-//! Python `mcap` + `mcap-ros2-support`, `scripts/bag-fixture.sh`) from a generated dataset
-//! imports into that dataset and learns the same knowledge; every bad bag or annotation gives
-//! an error naming the topic, the time and the value.
+//! ROS 2 bags (issue 19), against an independent encoder and decoder (Foxglove's Python
+//! `mcap` and `mcap-ros2-support`, run by `scripts/bag-fixture.sh`): a bag written from a
+//! generated dataset imports (`prf import-bag`) into that dataset and learns the same
+//! knowledge; every bad bag or annotation gives an error naming the topic, the time and the
+//! value; the bags `prf plan --mcap` and `prf export-mcap` write decode, message by message,
+//! from their own schemas.
 
 mod common;
 
@@ -19,6 +21,24 @@ use std::path::Path;
 use std::process::Command;
 
 fn quiet(_: prf_files::Progress) {}
+
+/// Runs `scripts/bag-fixture.sh` with `args`; its standard output.
+fn fixture_script(args: &[&std::ffi::OsStr]) -> String {
+    let out = Command::new("bash")
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../scripts/bag-fixture.sh"
+        ))
+        .args(args)
+        .output()
+        .expect("run scripts/bag-fixture.sh");
+    assert!(
+        out.status.success(),
+        "scripts/bag-fixture.sh {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("UTF-8")
+}
 
 /// The largest difference of two datasets' samples: [t, arm, gripper, base x/y, yaw (wrapped)].
 fn differences(a: &Dataset, b: &Dataset) -> [f64; 5] {
@@ -46,15 +66,7 @@ fn a_bag_from_an_independent_writer_imports_into_the_dataset_and_learns_the_same
     let dir = TempDir::new("import-bag");
     let (original, fixture) = (dir.path().join("original"), dir.path().join("bag"));
     run_prf(&["gen", "--only", "0-1", "--quiet"], &original);
-    let status = Command::new("bash")
-        .arg(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../scripts/bag-fixture.sh"
-        ))
-        .args([&original, &fixture])
-        .status()
-        .expect("run scripts/bag-fixture.sh");
-    assert!(status.success(), "scripts/bag-fixture.sh failed");
+    fixture_script(&["make".as_ref(), original.as_os_str(), fixture.as_os_str()]);
     let (bag, tasks) = (fixture.join("bag.mcap"), fixture.join("tasks.yaml"));
     let import = |name: &str, extra: &[&str]| {
         let out = dir.path().join(name);
@@ -452,4 +464,207 @@ fn every_import_error_names_the_topic_the_time_and_the_value() {
     .unwrap();
     let e = bag::read_annotation(&ann).unwrap_err().to_string();
     assert!(e.contains("tasks.yaml:3") && e.contains("gripper"), "{e}");
+}
+
+// ---- exported bags, decoded by the independent reader ----
+
+/// Runs `prf` with `args`; its standard output.
+fn prf(args: &[&std::ffi::OsStr]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_prf"))
+        .args(args)
+        .output()
+        .expect("start prf");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "prf {args:?}: {stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+/// The bag's messages as the Python reader decoded them.
+fn read_back(bag: &Path) -> serde_json::Value {
+    let text = fixture_script(&["read".as_ref(), bag.as_os_str()]);
+    serde_json::from_str(&text).expect("reader JSON")
+}
+
+/// Rows of a trajectory CSV: [t, base x, y, yaw, a1 … a7, gripper].
+fn csv_rows(path: &Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(path)
+        .expect("CSV")
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().expect("number")).collect())
+        .collect()
+}
+
+fn positions(state: &serde_json::Value) -> Vec<f64> {
+    state["position"]
+        .as_array()
+        .expect("positions")
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
+}
+
+fn assert_arm(state: &serde_json::Value, row: &[f64], names: &[String]) {
+    let expected_names: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    let got: Vec<&str> = state["name"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(got, expected_names);
+    for (a, b) in positions(state).iter().zip(&row[4..4 + NA]) {
+        assert!((a - b).abs() <= 1e-9, "{a} vs {b}");
+    }
+    let stamp = state["stamp"].as_i64().unwrap();
+    assert_eq!(
+        stamp,
+        prf_offline::export_mcap::T0 + (row[0] * 1e9).round() as i64
+    );
+}
+
+#[test]
+fn exported_bags_decode_with_an_independent_reader() {
+    let dir = TempDir::new("export-mcap");
+    let (ds_dir, blob) = (dir.path().join("dataset"), dir.path().join("cell.blob"));
+    run_prf(&["gen", "--only", "0-1", "--quiet"], &ds_dir);
+    run_prf(&["learn", ds_dir.to_str().unwrap(), "--quiet"], &blob);
+    let model = RobotModel::kmr_iiwa14();
+    let ds = Dataset::read(&ds_dir, &model).expect("dataset");
+    let names = prf_files::robot::chain_names(prf_files::robot::EXAMPLE_URDF, "urdf")
+        .expect("names")
+        .arm_joints;
+    let world = prf_sim::world::World::example();
+    let obstacles = prf_sim::world::geometry::Cell::new(&world, &model)
+        .obstacles
+        .len() as u64;
+
+    // A planned program: the bag holds exactly the executed samples, decimated to 100 Hz.
+    let task = &ds.demonstrations[0].task;
+    let (csv, bag) = (
+        dir.path().join("program.csv"),
+        dir.path().join("program.mcap"),
+    );
+    let out = prf(&[
+        "plan".as_ref(),
+        blob.as_os_str(),
+        "--part".as_ref(),
+        task.part.id.as_ref(),
+        "--from".as_ref(),
+        task.from.id.as_ref(),
+        "--to".as_ref(),
+        task.to.id.as_ref(),
+        "--export".as_ref(),
+        csv.as_os_str(),
+        "--mcap".as_ref(),
+        bag.as_os_str(),
+    ]);
+    assert!(out.contains("J* = 0.0 mm"), "{out}");
+    let rows = csv_rows(&csv);
+    let n = rows.len().div_ceil(10) as u64;
+    let r = read_back(&bag);
+    let topic = |t: &str| {
+        (
+            r["topics"][t]["schema"].as_str(),
+            r["topics"][t]["count"].as_u64(),
+        )
+    };
+    let from = format!("/prf/workspace/{}", task.from.id.to_lowercase());
+    let to = format!("/prf/workspace/{}", task.to.id.to_lowercase());
+    for (t, schema, count) in [
+        ("/robot_description", "std_msgs/msg/String", Some(1)),
+        ("/tf_static", "tf2_msgs/msg/TFMessage", Some(1)),
+        ("/joint_states", "sensor_msgs/msg/JointState", Some(n)),
+        ("/tf", "tf2_msgs/msg/TFMessage", Some(n)),
+        ("/prf/gripper", "std_msgs/msg/Float64", Some(n)),
+        ("/prf/risk", "std_msgs/msg/Float64", None),
+        (
+            "/prf/obstacles",
+            "visualization_msgs/msg/MarkerArray",
+            Some(1),
+        ),
+        ("/prf/parts", "visualization_msgs/msg/MarkerArray", Some(1)),
+        (from.as_str(), "sensor_msgs/msg/PointCloud2", Some(1)),
+        (to.as_str(), "sensor_msgs/msg/PointCloud2", Some(1)),
+    ] {
+        let (s, c) = topic(t);
+        assert_eq!(s, Some(schema), "{t}");
+        if count.is_some() {
+            assert_eq!(c, count, "{t}");
+        }
+    }
+    assert_eq!(
+        r["topics"].as_object().unwrap().len(),
+        10,
+        "{}",
+        r["topics"]
+    );
+    assert_eq!(r["robot_description"], prf_files::robot::EXAMPLE_URDF);
+    assert_arm(&r["first_joint_state"], &rows[0], &names);
+    assert_arm(&r["last_joint_state"], &rows[(n as usize - 1) * 10], &names);
+    // J* = 0: every configuration at a stance is inside its Ω+.
+    assert_eq!(r["risk"], serde_json::json!([0.0, 0.0]));
+    for t in [&from, &to] {
+        let c = &r["clouds"][t.as_str()];
+        let points = c["points"].as_u64().unwrap();
+        assert!(points > 100, "{t}: {c}");
+        assert_eq!(c["bytes"].as_u64(), Some(16 * points));
+        assert_eq!(c["fields"], serde_json::json!(["x", "y", "z", "distance"]));
+    }
+    assert_eq!(r["markers"]["/prf/obstacles"].as_u64(), Some(obstacles));
+    assert_eq!(r["markers"]["/prf/parts"].as_u64(), Some(2));
+
+    // The dataset: both programs at 100 Hz, 1 s apart.
+    let bag = dir.path().join("dataset.mcap");
+    run_prf(
+        &["export-mcap", "--dataset", ds_dir.to_str().unwrap()],
+        &bag,
+    );
+    let r = read_back(&bag);
+    let total: usize = ds.demonstrations.iter().map(|d| d.samples.len()).sum();
+    assert_eq!(
+        r["topics"]["/joint_states"]["count"].as_u64(),
+        Some(total as u64)
+    );
+    let row = |s: &prf_files::dataset::Sample, offset: f64| {
+        let mut v = vec![s.t + offset, s.base[0], s.base[1], s.base[2]];
+        v.extend(s.arm);
+        v
+    };
+    let first = &ds.demonstrations[0].samples;
+    let last = &ds.demonstrations[1].samples;
+    assert_arm(&r["first_joint_state"], &row(&first[0], 0.0), &names);
+    let offset = first.last().unwrap().t + 1.0;
+    assert_arm(
+        &r["last_joint_state"],
+        &row(last.last().unwrap(), offset),
+        &names,
+    );
+
+    // The blob's knowledge: a cloud and the stances at every location of a learned type.
+    let bag = dir.path().join("knowledge.mcap");
+    run_prf(&["export-mcap", "--blob", blob.to_str().unwrap()], &bag);
+    let r = read_back(&bag);
+    let bytes = std::fs::read(&blob).unwrap();
+    let rt = prf_runtime::Runtime::load(&bytes).expect("blob");
+    let (mut clouds, mut stances) = (0, 0);
+    for t in 0..rt.blob.payload.location_types.len() {
+        let lt = rt.blob.location_type(t).unwrap();
+        for l in world.locations.iter().filter(|l| l.kind == lt.name) {
+            stances += lt.stances.len() as u64;
+            if lt.workspace.is_some() {
+                clouds += 1;
+                let c = &r["clouds"][format!("/prf/workspace/{}", l.id.to_lowercase())];
+                assert_eq!(c["frame"].as_str(), Some(l.id.as_str()));
+                assert!(c["points"].as_u64().unwrap() > 100, "{c}");
+            }
+        }
+    }
+    assert!(clouds >= 2, "{clouds} workspaces");
+    assert_eq!(r["clouds"].as_object().unwrap().len(), clouds);
+    assert_eq!(r["markers"]["/prf/stances"].as_u64(), Some(stances));
 }
