@@ -8,3 +8,4 @@ pub mod experiment;
 pub mod export_mcap;
 pub mod firmware;
 pub mod plots;
+pub mod view;

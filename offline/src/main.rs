@@ -7,7 +7,7 @@ mod synthetic;
 use clap::{Parser, Subcommand};
 use cli::{
     check_dataset, demo, envelope, experiment, export_mcap, firmware, generate, import_bag,
-    inspect, learn, plan, rdmp_demo, run,
+    inspect, learn, plan, rdmp_demo, run, view,
 };
 
 #[global_allocator]
@@ -47,6 +47,9 @@ enum Command {
     /// robot description, joint states, /tf, workspaces as point clouds, obstacles, parts and
     /// stances as markers (`prf plan --mcap` writes a planned program with its risk).
     ExportMcap(export_mcap::Args),
+    /// Draw a planned program in its cell as PNG and SVG, from above and from the side: the
+    /// robot's spheres at keyframes, the TCP path, the workspaces, obstacles and the part.
+    View(view::Args),
     /// Learn affordances, workspaces and skills from a dataset (Alg. 3) and compile the blob.
     Learn(learn::Args),
     /// Validate a blob and print its contents and size by section.
@@ -88,6 +91,7 @@ fn main() -> anyhow::Result<()> {
         Some(Command::CheckDataset(args)) => check_dataset::run(&args),
         Some(Command::ImportBag(args)) => import_bag::run(&args),
         Some(Command::ExportMcap(args)) => export_mcap::run(&args),
+        Some(Command::View(args)) => view::run(&args),
         Some(Command::Learn(args)) => learn::run(&args),
         Some(Command::Inspect(args)) => inspect::run(&args),
         Some(Command::Plan(args)) => plan::run(&args),

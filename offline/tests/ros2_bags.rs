@@ -618,6 +618,23 @@ fn exported_bags_decode_with_an_independent_reader() {
     assert_eq!(r["markers"]["/prf/obstacles"].as_u64(), Some(obstacles));
     assert_eq!(r["markers"]["/prf/parts"].as_u64(), Some(2));
 
+    // The same program as pictures.
+    let view = dir.path().join("view");
+    run_prf(
+        &[
+            "view",
+            blob.to_str().unwrap(),
+            "--part",
+            &task.part.id,
+            "--from",
+            &task.from.id,
+            "--to",
+            &task.to.id,
+        ],
+        &view,
+    );
+    common::assert_charts(&view, &["top".into(), "side".into()]);
+
     // The dataset: both programs at 100 Hz, 1 s apart.
     let bag = dir.path().join("dataset.mcap");
     run_prf(

@@ -18,3 +18,4 @@ pub mod plan;
 pub mod progress;
 pub mod rdmp_demo;
 pub mod run;
+pub mod view;

@@ -153,7 +153,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 
 /// Runs `program` on the ideal cell whose platform navigates on `world`'s floor map, prints
 /// each drive's corners and clearances; the samples at 1 kHz.
-fn execute(
+pub(crate) fn execute(
     world: &World,
     rt: &Runtime<'_>,
     ft: &FloorTask,
