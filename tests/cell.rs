@@ -415,3 +415,191 @@ fn killed_cell_makes_the_watchdog_brake_within_limits() {
     drop(fw);
     restart_works(&cell);
 }
+
+/// Which process a stall test stops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Stalled {
+    Firmware,
+    Cell,
+}
+
+/// What one stall did.
+struct Stall {
+    report: serde_json::Value,
+    setpoints: Vec<SetpointMsg>,
+    states: Vec<JointStateMsg>,
+    /// When the process was stopped and continued, CLOCK_MONOTONIC ns.
+    stopped: u64,
+    continued: u64,
+}
+
+/// Runs the task with `--stop-after 16` s, stops `who` with SIGSTOP for `ms` once the arm moves
+/// faster than 0.3 rad/s (mid-reach at CNC1), continues it, and gathers what happened until
+/// the cell has exited and the arm has had 1.5 s to come to rest.
+fn stall(who: Stalled, ms: u64) -> Stall {
+    use rustix::process::{Pid, Signal, kill_process};
+    let cell = cell_name(&format!("stall-{who:?}-{ms}").to_lowercase());
+    let fw = firmware(&cell, 100);
+    let watch = Watch::start(&cell);
+    let json = dir().join(format!("{cell}.json"));
+    let mut run = run_cell(&cell, &json, &["--stop-after", "16"]);
+    watch.until(Duration::from_secs(60), |sp, _| {
+        sp.last()
+            .is_some_and(|s| s.mode == mode::ARM && s.qd.iter().any(|v| v.abs() > 0.3))
+    });
+    let child = match who {
+        Stalled::Firmware => &fw.0,
+        Stalled::Cell => &run.0,
+    };
+    let pid = Pid::from_child(child);
+    let stopped = now_ns();
+    kill_process(pid, Signal::STOP).expect("SIGSTOP");
+    std::thread::sleep(Duration::from_millis(ms));
+    kill_process(pid, Signal::CONT).expect("SIGCONT");
+    let continued = now_ns();
+    run.wait_for(Duration::from_secs(60));
+    std::thread::sleep(Duration::from_millis(1500));
+    let (setpoints, states) = watch.finish();
+    drop(fw);
+    Stall {
+        report: report(&json),
+        setpoints,
+        states,
+        stopped,
+        continued,
+    }
+}
+
+/// Peak (speed, acceleration, jerk) ratios of an arm stream at 1 ms that stands still before
+/// its first sample, over its own samples only (a stream cut by a fault ends moving: the
+/// controller's brake takes over from there).
+fn open_end_ratios(stream: &[[f64; NA]], limits: &MotionLimits) -> [f64; 3] {
+    let dt = 1e-3;
+    let mut p = vec![stream[0]; 3];
+    p.extend_from_slice(stream);
+    let mut r = [0.0f64; 3];
+    for k in 3..p.len() {
+        for j in 0..NA {
+            let d1 = p[k][j] - p[k - 1][j];
+            let d2 = p[k][j] - 2.0 * p[k - 1][j] + p[k - 2][j];
+            let d3 = p[k][j] - 3.0 * p[k - 1][j] + 3.0 * p[k - 2][j] - p[k - 3][j];
+            r[0] = r[0].max(d1.abs() / dt / limits.arm_speed[j]);
+            r[1] = r[1].max(d2.abs() / (dt * dt) / limits.arm_acceleration[j]);
+            r[2] = r[2].max(d3.abs() / (dt * dt * dt) / limits.arm_jerk[j]);
+        }
+    }
+    r
+}
+
+/// The measured arm after `from_ns`: consecutive states within the joint, speed and
+/// acceleration limits (the controller's own brake), at rest at the end. Returns the peak
+/// speed seen.
+fn assert_brakes_to_rest(states: &[JointStateMsg], from_ns: u64, model: &RobotModel) -> f64 {
+    let limits = MotionLimits::kmr_iiwa(model);
+    let after: Vec<&JointStateMsg> = states.iter().filter(|m| m.t_ns > from_ns).collect();
+    let mut peak: f64 = 0.0;
+    for w in after.windows(2) {
+        assert_eq!(model.limit_violation(&w[1].q), None);
+        for j in 0..NA {
+            assert!(w[1].qd[j].abs() <= limits.arm_speed[j] + 1e-12);
+            if w[1].seq == w[0].seq + 1 {
+                let acc = (w[1].qd[j] - w[0].qd[j]).abs() / 1e-3;
+                assert!(
+                    acc <= limits.arm_acceleration[j] * (1.0 + 1e-9),
+                    "A{} {acc}",
+                    j + 1
+                );
+            }
+            peak = peak.max(w[0].qd[j].abs());
+        }
+    }
+    let end = after.last().expect("states after the stall");
+    let rest = end.qd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(rest < 1e-4, "arm still moving: {rest} rad/s");
+    peak
+}
+
+/// Issue 18: either process stopped (SIGSTOP) for 20 ms, 200 ms and 2 s mid-reach, then
+/// continued. A 20 ms stall of either is ridden through: no setpoint lost, the stream within
+/// the limits, the arm on its path (the controller replays late setpoints in place of the
+/// cycles it coasted). Longer stalls stop the arm: a silent controller is a fault of the cell
+/// after 100 ms (it sends nothing more); a silent cell trips the controller's watchdog after
+/// 100 cycles; either way the controller brakes to rest within the limits, and the setpoints
+/// that did arrive are consecutive (none lost) and within the limits.
+#[test]
+fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let model = RobotModel::kmr_iiwa14();
+    let limits = MotionLimits::kmr_iiwa(&model);
+    println!("stalled   ms  outcome                                   detected   setpoints  lost  peak ratio (v, a, j)");
+    for who in [Stalled::Firmware, Stalled::Cell] {
+        for ms in [20, 200, 2000] {
+            let s = stall(who, ms);
+            let r = &s.report;
+            // Every setpoint that reached the topic: 1, 2, 3, … and within the limits.
+            for (i, sp) in s.setpoints.iter().enumerate() {
+                assert_eq!(sp.seq, i as u64 + 1, "{who:?} {ms} ms: sequence");
+            }
+            assert_eq!(r["lost"], 0, "{who:?} {ms} ms: {r}");
+            let q: Vec<[f64; NA]> = s.setpoints.iter().map(|m| m.q).collect();
+            let ratios = open_end_ratios(&q, &limits);
+            assert!(
+                ratios.iter().all(|x| *x <= 1.0 + 1e-9),
+                "{who:?} {ms} ms: {ratios:?}"
+            );
+            let (outcome, detected) = if ms < 100 {
+                assert!(r["fault"].is_null(), "{who:?} {ms} ms: {r}");
+                assert_eq!(r["stopped"], true, "{r}");
+                let track = r["max_tracking_error"].as_f64().unwrap();
+                assert!(track <= 1e-2, "{who:?} {ms} ms: tracking {track} rad");
+                (format!("ridden through, tracking {:.2} mrad", track * 1e3), String::new())
+            } else {
+                let fault = r["fault"].as_str().unwrap_or_else(|| panic!("{r}"));
+                let detected_ms = match who {
+                    Stalled::Firmware => {
+                        assert!(fault.contains("firmware-sim silent"), "{fault}");
+                        let at = r["fault_t_ns"].as_u64().unwrap();
+                        (at - s.stopped) as f64 * 1e-6
+                    }
+                    Stalled::Cell => {
+                        assert!(fault.contains("watchdog"), "{fault}");
+                        let last = s
+                            .setpoints
+                            .iter()
+                            .filter(|m| m.t_ns < s.continued)
+                            .next_back()
+                            .expect("setpoints before the stall")
+                            .t_ns;
+                        let trip = s
+                            .states
+                            .iter()
+                            .find(|m| m.t_ns > last && m.status & status::WATCHDOG != 0)
+                            .expect("watchdog trip");
+                        (trip.t_ns - last) as f64 * 1e-6
+                    }
+                };
+                assert!(
+                    (100.0..=150.0).contains(&detected_ms),
+                    "{who:?} {ms} ms: detected after {detected_ms} ms"
+                );
+                let peak = assert_brakes_to_rest(&s.states, s.stopped, &model);
+                (
+                    format!("{fault:.42}, braked from {peak:.2} rad/s"),
+                    format!("{detected_ms:.1} ms"),
+                )
+            };
+            println!(
+                "{:<9} {:>4}  {:<41} {:>9} {:>10} {:>5}  {:.3} {:.3} {:.3}",
+                format!("{who:?}"),
+                ms,
+                outcome,
+                detected,
+                s.setpoints.len(),
+                r["lost"],
+                ratios[0],
+                ratios[1],
+                ratios[2]
+            );
+        }
+    }
+}
