@@ -531,7 +531,9 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let model = RobotModel::kmr_iiwa14();
     let limits = MotionLimits::kmr_iiwa(&model);
-    println!("stalled   ms  outcome                                   detected   setpoints  lost  peak ratio (v, a, j)");
+    println!(
+        "stalled   ms  outcome                                   detected   setpoints  lost  peak ratio (v, a, j)"
+    );
     for who in [Stalled::Firmware, Stalled::Cell] {
         for ms in [20, 200, 2000] {
             let s = stall(who, ms);
@@ -552,7 +554,10 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
                 assert_eq!(r["stopped"], true, "{r}");
                 let track = r["max_tracking_error"].as_f64().unwrap();
                 assert!(track <= 1e-2, "{who:?} {ms} ms: tracking {track} rad");
-                (format!("ridden through, tracking {:.2} mrad", track * 1e3), String::new())
+                (
+                    format!("ridden through, tracking {:.2} mrad", track * 1e3),
+                    String::new(),
+                )
             } else {
                 let fault = r["fault"].as_str().unwrap_or_else(|| panic!("{r}"));
                 let detected_ms = match who {
@@ -566,8 +571,7 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
                         let last = s
                             .setpoints
                             .iter()
-                            .filter(|m| m.t_ns < s.continued)
-                            .next_back()
+                            .rfind(|m| m.t_ns < s.continued)
                             .expect("setpoints before the stall")
                             .t_ns;
                         let trip = s

@@ -63,21 +63,33 @@ pub trait Chart {
         DB::ErrorType: 'static;
 }
 
-/// Writes `chart` as `stem.svg` and `stem.png`; returns both paths.
+/// Writes `chart` as `stem.svg` and `stem.png`, each whole or not at all (drawn into a
+/// temporary file beside it, then renamed); returns both paths.
 pub fn save(chart: &impl Chart, stem: &Path) -> Result<[PathBuf; 2]> {
     register_font()?;
     let svg = stem.with_extension("svg");
     let png = stem.with_extension("png");
+    let temp = |p: &Path| {
+        prf_files::atomic::temp_beside(p).with_context(|| format!("writing {}", p.display()))
+    };
     {
-        let root = SVGBackend::new(&svg, chart.size()).into_drawing_area();
+        let tmp = temp(&svg)?;
+        let root = SVGBackend::new(tmp.path(), chart.size()).into_drawing_area();
         chart.draw(&root)?;
         root.present()
             .with_context(|| format!("writing {}", svg.display()))?;
+        drop(root);
+        prf_files::atomic::persist(tmp, &svg)
+            .with_context(|| format!("writing {}", svg.display()))?;
     }
     {
-        let root = BitMapBackend::new(&png, chart.size()).into_drawing_area();
+        let tmp = temp(&png)?;
+        let root = BitMapBackend::new(tmp.path(), chart.size()).into_drawing_area();
         chart.draw(&root)?;
         root.present()
+            .with_context(|| format!("writing {}", png.display()))?;
+        drop(root);
+        prf_files::atomic::persist(tmp, &png)
             .with_context(|| format!("writing {}", png.display()))?;
     }
     Ok([svg, png])

@@ -321,10 +321,23 @@ impl Dataset {
         })
     }
 
-    /// Writes the dataset to `dir` (created if needed): `manifest.json`, and per
-    /// demonstration `<id>.task.json` and `<id>.csv`.
+    /// Writes the dataset to `dir` whole or not at all: `manifest.json`, and per demonstration
+    /// `<id>.task.json` and `<id>.csv`, filled into a new directory that then takes the place
+    /// of `dir` ([`crate::atomic::replace_dir`]; a killed run or a full disk leaves the
+    /// previous dataset as it was). A `dir` holding files that are not a dataset's is refused:
+    /// replacing it would delete them.
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
-        std::fs::create_dir_all(dir)?;
+        if let Some(other) = foreign_entry(dir)? {
+            return Err(std::io::Error::other(format!(
+                "{} holds {other:?}, which is not part of a dataset: writing a dataset replaces the whole directory (choose another one, or move it away)",
+                dir.display()
+            )));
+        }
+        crate::atomic::replace_dir(dir, |t| self.write_into(t))
+    }
+
+    /// The dataset's files, into the empty directory `dir`.
+    fn write_into(&self, dir: &Path) -> std::io::Result<()> {
         let mut entries = Vec::new();
         for d in &self.demonstrations {
             let task = format!("{}.task.json", d.id);
@@ -352,6 +365,30 @@ impl Dataset {
         let json = serde_json::to_string_pretty(&manifest).map_err(std::io::Error::other)?;
         std::fs::write(dir.join(MANIFEST), json + "\n")
     }
+}
+
+/// The first entry of `dir` that a dataset directory does not hold (its manifest, task and
+/// trajectory files, `prf gen`'s floor plan and `prf demo`'s completion marker); None when
+/// `dir` is missing.
+fn foreign_entry(dir: &Path) -> std::io::Result<Option<String>> {
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(e),
+    };
+    for e in entries {
+        let e = e?;
+        let name = e.file_name().to_string_lossy().into_owned();
+        let ours = name == MANIFEST
+            || name == "floorplan.svg"
+            || name == ".complete"
+            || ((name.ends_with(".task.json") || name.ends_with(".csv"))
+                && e.file_type()?.is_file());
+        if !ours {
+            return Ok(Some(name));
+        }
+    }
+    Ok(None)
 }
 
 fn read_task(path: &Path, manifest: &Manifest) -> Result<TaskRecord, DatasetError> {

@@ -3,6 +3,7 @@
 //! robot ([`robot`]: URDF + collision-sphere file), and [`progress`], the callback through which
 //! long work reports. Formats: `docs/formats.md`.
 
+pub mod atomic;
 pub mod bag;
 pub mod dataset;
 pub mod progress;

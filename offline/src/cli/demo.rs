@@ -146,7 +146,8 @@ fn blob(dir: &Path, dataset: &Dataset, model: &RobotModel) -> anyhow::Result<(Pa
     b.finish();
     let bytes = compile(&knowledge)?;
     let blob = dir.join("cell.blob");
-    std::fs::write(&blob, &bytes).with_context(|| format!("writing {}", blob.display()))?;
+    prf_files::atomic::write(&blob, &bytes)
+        .with_context(|| format!("writing {}", blob.display()))?;
     println!(
         "blob: {} ({:.1} KiB) learned in {:.2} s",
         blob.display(),

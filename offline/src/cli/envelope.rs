@@ -107,7 +107,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     print_tables(&cells, &grid);
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let csv = a.out.join("envelope.csv");
-    std::fs::write(&csv, to_csv(&cells)).with_context(|| format!("writing {}", csv.display()))?;
+    prf_files::atomic::write(&csv, to_csv(&cells))
+        .with_context(|| format!("writing {}", csv.display()))?;
     let title = format!(
         "{}: part pose at {kind} ({location}) moved; green risk 0, orange risky, grey budget spent, red no plan",
         ft.label()

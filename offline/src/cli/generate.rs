@@ -103,7 +103,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .with_context(|| format!("{}: cannot write the dataset", args.output.display()))?;
     let cell = Cell::new(&world, &RobotModel::kmr_iiwa14());
     let plan = args.output.join("floorplan.svg");
-    std::fs::write(&plan, floorplan_svg(&world, &cell, &dataset.demonstrations))
+    prf_files::atomic::write(&plan, floorplan_svg(&world, &cell, &dataset.demonstrations))
         .with_context(|| format!("{}: cannot write", plan.display()))?;
     if !args.quiet {
         let seconds: f64 = dataset

@@ -66,7 +66,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let t2 = Instant::now();
     let bytes = compile(&k)?;
     let t_compile = t2.elapsed().as_secs_f64();
-    std::fs::write(&a.output, &bytes).with_context(|| format!("writing {}", a.output.display()))?;
+    prf_files::atomic::write(&a.output, &bytes)
+        .with_context(|| format!("writing {}", a.output.display()))?;
     if a.quiet {
         return Ok(());
     }

@@ -110,7 +110,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let ft = a.task.required(&world)?;
     if let Some(path) = &a.task_block {
         let block = ft.task_block()?;
-        std::fs::write(path, &block).with_context(|| format!("writing {}", path.display()))?;
+        prf_files::atomic::write(path, &block)
+            .with_context(|| format!("writing {}", path.display()))?;
         println!(
             "task block: {} B written to {}",
             block.len(),
@@ -134,7 +135,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         };
         let samples = execute(&world, &rt, &ft, program)?;
         if let Some(path) = &a.export {
-            std::fs::write(path, trajectory_csv(&samples))
+            prf_files::atomic::write(path, trajectory_csv(&samples))
                 .with_context(|| format!("writing {}", path.display()))?;
             println!(
                 "program: {:.2} s at 1 kHz on an ideal cell (arm exact, platform navigating on the floor map keeping {:.0} mm) ({} samples) written to {}",

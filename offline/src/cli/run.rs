@@ -80,7 +80,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         cell.shutdown()?;
     }
     if let Some(path) = &a.json {
-        std::fs::write(path, serde_json::to_string_pretty(&report)?)
+        prf_files::atomic::write(path, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("writing {}", path.display()))?;
     }
     println!("{}", report.summary());

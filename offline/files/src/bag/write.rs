@@ -18,27 +18,35 @@ pub struct WriteError {
     pub detail: String,
 }
 
-/// An MCAP file being written; one channel per topic, created on its first message.
+/// An MCAP file being written; one channel per topic, created on its first message. It is
+/// written beside its path and moved there by [`BagWriter::finish`]: an export that fails or is
+/// killed leaves the previous file as it was.
 pub struct BagWriter {
     w: mcap::Writer<BufWriter<File>>,
+    tmp: tempfile::NamedTempFile,
     path: PathBuf,
     /// Topic → (channel, schema name, messages).
     channels: BTreeMap<String, (u16, &'static str, u64)>,
 }
 
 impl BagWriter {
-    /// Creates (or replaces) `path`.
+    /// Starts the bag that [`BagWriter::finish`] puts at `path`.
     pub fn create(path: &Path) -> Result<Self, WriteError> {
         let fail = |what: &str, detail: String| WriteError {
             path: path.to_path_buf(),
             what: what.into(),
             detail,
         };
-        let file = File::create(path).map_err(|e| fail("the file", e.to_string()))?;
+        let tmp = crate::atomic::temp_beside(path).map_err(|e| fail("the file", e.to_string()))?;
+        let file = tmp
+            .as_file()
+            .try_clone()
+            .map_err(|e| fail("the file", e.to_string()))?;
         let w = mcap::Writer::new(BufWriter::new(file))
             .map_err(|e| fail("the MCAP header", e.to_string()))?;
         Ok(BagWriter {
             w,
+            tmp,
             path: path.to_path_buf(),
             channels: BTreeMap::new(),
         })
@@ -114,11 +122,21 @@ impl BagWriter {
             .collect()
     }
 
-    /// Writes the summary and closes the file.
+    /// Writes the summary and puts the complete file at its path.
     pub fn finish(mut self) -> Result<(), WriteError> {
         self.w
             .finish()
-            .map(|_| ())
-            .map_err(|e| self.fail("the summary".into(), e))
+            .map_err(|e| self.fail("the summary".into(), e))?;
+        let path = self.path.clone();
+        let fail = |e: std::io::Error| WriteError {
+            path: path.clone(),
+            what: "the file".into(),
+            detail: e.to_string(),
+        };
+        self.w
+            .into_inner()
+            .into_inner()
+            .map_err(|e| fail(e.into_error()))?;
+        crate::atomic::persist(self.tmp, &path).map_err(fail)
     }
 }

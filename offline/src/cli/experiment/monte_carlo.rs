@@ -63,10 +63,10 @@ pub fn run(a: &MonteCarloArgs) -> Result<()> {
     let afforded = setup.world.afforded_tasks().len();
 
     let csv = a.out.join("episodes.csv");
-    std::fs::write(&csv, episodes_csv(&setup, &episodes))
+    prf_files::atomic::write(&csv, episodes_csv(&setup, &episodes))
         .with_context(|| format!("writing {}", csv.display()))?;
     let per_step = a.out.join("steps.csv");
-    std::fs::write(&per_step, steps_csv(&episodes, steps))
+    prf_files::atomic::write(&per_step, steps_csv(&episodes, steps))
         .with_context(|| format!("writing {}", per_step.display()))?;
     charts(&episodes, steps, afforded, tasks, &a.out)?;
 

@@ -40,10 +40,10 @@ pub fn run(a: &RdmpVsDmpArgs) -> Result<()> {
     bar.finish();
     let elapsed = t0.elapsed().as_secs_f64();
     let csv = a.out.join("rdmp_vs_dmp.csv");
-    std::fs::write(&csv, goals_csv(&results))
+    prf_files::atomic::write(&csv, goals_csv(&results))
         .with_context(|| format!("writing {}", csv.display()))?;
     let summary = a.out.join("summary.csv");
-    std::fs::write(&summary, summary_csv(&results))
+    prf_files::atomic::write(&summary, summary_csv(&results))
         .with_context(|| format!("writing {}", summary.display()))?;
     let mut written = 0;
     for r in &results {

@@ -1,0 +1,122 @@
+//! Files and directories written whole or not at all (issue 18): everything is written to a
+//! temporary file (or directory) beside the target, synced, and then renamed over it — a
+//! directory by exchanging the two atomically (`renameat2(RENAME_EXCHANGE)`). A full disk, a
+//! file-size limit or a killed process leaves the previous version intact; at worst a
+//! temporary `.prf-tmp-*` entry stays beside it.
+
+use std::fs::File;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+/// Prefix of the temporary entries.
+pub const TMP_PREFIX: &str = ".prf-tmp-";
+
+fn parent(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// A temporary file beside `path`, with `path`'s extension (some writers choose the format by
+/// it).
+pub fn temp_beside(path: &Path) -> io::Result<tempfile::NamedTempFile> {
+    let suffix = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    tempfile::Builder::new()
+        .prefix(TMP_PREFIX)
+        .suffix(&suffix)
+        .tempfile_in(parent(path))
+}
+
+/// Moves a complete temporary file over `path` (after syncing it).
+pub fn persist(tmp: tempfile::NamedTempFile, path: &Path) -> io::Result<()> {
+    tmp.as_file().sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+/// Writes `bytes` to `path` whole or not at all.
+pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> io::Result<()> {
+    let mut tmp = temp_beside(path)?;
+    tmp.write_all(bytes.as_ref())?;
+    persist(tmp, path)
+}
+
+/// A file written by `fill` through a handle, placed at `path` only if `fill` succeeds.
+pub fn write_with<T>(path: &Path, fill: impl FnOnce(&mut File) -> io::Result<T>) -> io::Result<T> {
+    let mut tmp = temp_beside(path)?;
+    let out = fill(tmp.as_file_mut())?;
+    persist(tmp, path)?;
+    Ok(out)
+}
+
+/// Fills a new directory with `fill` and puts it in place of `dir` (created if missing) by an
+/// atomic exchange; the previous contents are then removed.
+pub fn replace_dir<T>(dir: &Path, fill: impl FnOnce(&Path) -> io::Result<T>) -> io::Result<T> {
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "dir".into());
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!("{TMP_PREFIX}{name}-"))
+        .tempdir_in(parent(dir))?;
+    let out = fill(tmp.path())?;
+    for entry in std::fs::read_dir(tmp.path())? {
+        File::open(entry?.path())?.sync_all()?;
+    }
+    let staged: PathBuf = tmp.keep();
+    if dir.exists() {
+        rustix::fs::renameat_with(
+            rustix::fs::CWD,
+            &staged,
+            rustix::fs::CWD,
+            dir,
+            rustix::fs::RenameFlags::EXCHANGE,
+        )?;
+        // `staged` now holds the previous contents.
+        std::fs::remove_dir_all(&staged)?;
+    } else {
+        std::fs::rename(&staged, dir)?;
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_and_directories_are_replaced_whole_and_failures_leave_the_old_version() {
+        let base = tempfile::tempdir().unwrap();
+        let f = base.path().join("a.bin");
+        write(&f, b"old").unwrap();
+        write(&f, b"new").unwrap();
+        assert_eq!(std::fs::read(&f).unwrap(), b"new");
+        let failed = write_with(&f, |file| {
+            file.write_all(b"partial")?;
+            Err::<(), _>(io::Error::other("disk full"))
+        });
+        assert!(failed.is_err());
+        assert_eq!(std::fs::read(&f).unwrap(), b"new");
+
+        let d = base.path().join("ds");
+        replace_dir(&d, |t| std::fs::write(t.join("x"), "1")).unwrap();
+        replace_dir(&d, |t| std::fs::write(t.join("y"), "2")).unwrap();
+        assert!(!d.join("x").exists() && d.join("y").exists());
+        let failed = replace_dir(&d, |t| {
+            std::fs::write(t.join("z"), "3")?;
+            Err::<(), _>(io::Error::other("killed"))
+        });
+        assert!(failed.is_err());
+        assert!(d.join("y").exists() && !d.join("z").exists());
+        // Nothing temporary is left behind after success or a failure that returns.
+        let names: Vec<String> = std::fs::read_dir(base.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+    }
+}
