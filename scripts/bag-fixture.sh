@@ -13,7 +13,12 @@ case ${1:-} in
 esac
 root="$(cd "$(dirname "$0")/.." && pwd)"
 venv="$root/target/py-bag-fixture"
-if [ ! -x "$venv/bin/python" ]; then
+mkdir -p "$root/target"
+# One setup at a time (tests call this in parallel); the environment counts once it is complete.
+exec 9>"$venv.lock"
+flock 9
+if [ ! -e "$venv/.complete" ]; then
+  rm -rf "$venv"
   if ! python3 -m venv "$venv" >/dev/null 2>&1; then
     rm -rf "$venv"
     SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
@@ -23,7 +28,9 @@ if [ ! -x "$venv/bin/python" ]; then
   fi
   "$venv/bin/pip" install -q --disable-pip-version-check mcap==1.6.0 mcap-ros2-support==0.6.0 \
     PyYAML==6.0.4 zstandard==0.25.0 lz4==4.4.5
+  touch "$venv/.complete"
 fi
+flock -u 9
 if [ "$1" = make ]; then
   exec "$venv/bin/python" "$root/tools/bag-fixture/make_bag.py" "$2" "$3"
 fi

@@ -607,3 +607,44 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
         }
     }
 }
+
+/// Issue 18: a second, rogue cell trying to command a running controller is refused — the
+/// setpoint service admits one publisher — and the running task goes on untouched (nothing
+/// lost, repeated or refused).
+#[test]
+fn a_rogue_second_cell_is_refused_and_the_running_one_goes_on() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = cell_name("rogue");
+    let _fw = firmware(&cell, 100);
+    let watch = Watch::start(&cell);
+    let json = dir().join("rogue.json");
+    let mut run = run_cell(&cell, &json, &["--stop-after", "3"]);
+    watch.until(Duration::from_secs(30), |sp, _| sp.len() >= 500);
+    let rogue = prf()
+        .arg("run")
+        .arg(blob())
+        .args([
+            "--part", TASK[0], "--from", TASK[1], "--to", TASK[2], "--cell", &cell,
+        ])
+        .output()
+        .expect("start the rogue cell");
+    let said = String::from_utf8_lossy(&rogue.stderr);
+    assert!(!rogue.status.success(), "the rogue cell ran");
+    assert!(
+        said.contains(&format!("publisher of prf/{cell}/setpoint")),
+        "{said}"
+    );
+    assert!(run.wait_for(Duration::from_secs(60)).success());
+    let (sp, _) = watch.finish();
+    for (i, s) in sp.iter().enumerate() {
+        assert_eq!(s.seq, i as u64 + 1, "only the first cell's setpoints");
+    }
+    let r = report(&json);
+    assert_eq!(r["stopped"], true, "{r}");
+    assert_eq!(
+        (r_u64(&r, "lost"), r_u64(&r, "repeated"), r_u64(&r, "rejected")),
+        (0, 0, 0),
+        "{r}"
+    );
+    println!("rogue cell refused: {}", said.lines().last().unwrap_or(""));
+}
