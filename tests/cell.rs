@@ -587,13 +587,17 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
                     "{who:?} {ms} ms: detected after {detected_ms} ms"
                 );
                 let peak = assert_brakes_to_rest(&s.states, s.stopped, &model);
+                let what = match who {
+                    Stalled::Firmware => "cell faults: controller silent",
+                    Stalled::Cell => "watchdog",
+                };
                 (
-                    format!("{fault:.42}, braked from {peak:.2} rad/s"),
+                    format!("{what}; braked from {peak:.2} rad/s"),
                     format!("{detected_ms:.1} ms"),
                 )
             };
             println!(
-                "{:<9} {:>4}  {:<41} {:>9} {:>10} {:>5}  {:.3} {:.3} {:.3}",
+                "{:<9} {:>4}  {:<45} {:>8} {:>10} {:>5}  {:.3} {:.3} {:.3}",
                 format!("{who:?}"),
                 ms,
                 outcome,
@@ -642,9 +646,17 @@ fn a_rogue_second_cell_is_refused_and_the_running_one_goes_on() {
     let r = report(&json);
     assert_eq!(r["stopped"], true, "{r}");
     assert_eq!(
-        (r_u64(&r, "lost"), r_u64(&r, "repeated"), r_u64(&r, "rejected")),
+        (
+            r_u64(&r, "lost"),
+            r_u64(&r, "repeated"),
+            r_u64(&r, "rejected")
+        ),
         (0, 0, 0),
         "{r}"
     );
-    println!("rogue cell refused: {}", said.lines().last().unwrap_or(""));
+    let why = said
+        .lines()
+        .find(|l| l.contains("publisher of"))
+        .unwrap_or("");
+    println!("rogue cell refused: {}", why.trim());
 }

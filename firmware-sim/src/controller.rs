@@ -568,10 +568,10 @@ pub fn run(cfg: &Config) -> Result<Summary> {
         let run = waitset
             .wait_and_process_once_with_timeout(|_| CallbackProgression::Continue, timeout)
             .map_err(|e| ControllerError::WaitSet(format!("{e:?}")))?;
-        if matches!(
-            run,
-            WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt
-        ) {
+        // SIGINT and SIGTERM end the loop: iceoryx2 reports them as a termination request
+        // (a signal during the wait interrupts it, and the next wait reports it). Any other
+        // interruption — SIGCONT after a SIGSTOP, for one — is not a request to exit.
+        if run == WaitSetRunResult::TerminationRequest {
             c.event(format_args!("exit signal"))?;
             break;
         }
