@@ -10,7 +10,7 @@
 //! | `/prf/gripper` | `std_msgs/msg/Float64` | 0 open … 1 closed |
 //! | `/prf/risk` | `std_msgs/msg/Float64` | Eq. 16 of the configuration in its Ω+, m (at stances) |
 //! | `/prf/workspace/<type>` | `sensor_msgs/msg/PointCloud2` | Ω+ nodes inside, with `distance` |
-//! | `/prf/obstacles`, `/prf/parts`, `/prf/stances` | `visualization_msgs/msg/MarkerArray` | boxes, the part, stances |
+//! | `/prf/obstacles`, `/prf/parts`, `/prf/stances`, `/prf/grasps` | `visualization_msgs/msg/MarkerArray` | boxes, the part, stances, grasps |
 
 use prf_files::bag::messages::{
     self, ColorRgba, CompressedImage, Float64, Header, JointState, Marker, MarkerArray, MeshFile,

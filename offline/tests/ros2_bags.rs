@@ -8,7 +8,7 @@
 mod common;
 
 use byteorder::LittleEndian;
-use common::{TempDir, run_prf};
+use common::{TempDir, prf_stdout, run_prf};
 use prf_files::bag::messages::{self, Header, JointState, Odometry, Time};
 use prf_files::bag::{self, Annotation, BagConfig, GripperJoint, PlatformSource, Program};
 use prf_files::dataset::{Dataset, Instance, Placed, TaskRecord};
@@ -468,21 +468,6 @@ fn every_import_error_names_the_topic_the_time_and_the_value() {
 
 // ---- exported bags, decoded by the independent reader ----
 
-/// Runs `prf` with `args`; its standard output.
-fn prf(args: &[&std::ffi::OsStr]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_prf"))
-        .args(args)
-        .output()
-        .expect("start prf");
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "prf {args:?}: {stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    stdout
-}
-
 /// The bag's messages as the Python reader decoded them.
 fn read_back(bag: &Path) -> serde_json::Value {
     let text = fixture_script(&["read".as_ref(), bag.as_os_str()]);
@@ -549,7 +534,7 @@ fn exported_bags_decode_with_an_independent_reader() {
         dir.path().join("program.csv"),
         dir.path().join("program.mcap"),
     );
-    let out = prf(&[
+    let out = prf_stdout(&[
         "plan".as_ref(),
         blob.as_os_str(),
         "--part".as_ref(),
@@ -684,4 +669,12 @@ fn exported_bags_decode_with_an_independent_reader() {
     assert!(clouds >= 2, "{clouds} workspaces");
     assert_eq!(r["clouds"].as_object().unwrap().len(), clouds);
     assert_eq!(r["markers"]["/prf/stances"].as_u64(), Some(stances));
+    let grasps: usize = (0..rt.blob.payload.part_types.len())
+        .map(|t| rt.blob.part_type(t).unwrap().grasps.len())
+        .sum();
+    assert!(grasps > 0);
+    assert_eq!(
+        r["markers"]["/prf/grasps"].as_u64(),
+        Some((grasps * world.locations.len()) as u64)
+    );
 }

@@ -25,7 +25,8 @@ pub struct Args {
     pub dataset: Option<PathBuf>,
     /// Export a blob's knowledge: each location type's workspace Ω+ (as a point cloud with
     /// the signed distance) and learned stances (arrows) at every location of the world of
-    /// that type.
+    /// that type, and each part type's grasps (arrows along the TCP's approach axis) on the
+    /// part at every location.
     #[arg(long)]
     pub blob: Option<PathBuf>,
     /// The world whose locations and obstacles are drawn (default: the built-in example).
@@ -217,11 +218,51 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             }
         }
         x.markers("/prf/stances", stances)?;
+        x.markers("/prf/grasps", grasps(&rt, &world, path)?)?;
     }
     x.markers("/prf/obstacles", obstacles(&world))?;
     let counts = x.finish()?;
     report(&a.out, &counts);
     Ok(())
+}
+
+/// Each part type's learned grasps (the TCP, the arrow along its approach axis z) on the
+/// part at its nominal pose at every location of the world.
+fn grasps(
+    rt: &prf_runtime::Runtime<'_>,
+    world: &World,
+    path: &Path,
+) -> anyhow::Result<Vec<Marker>> {
+    // The marker's arrow points along its x axis: turn x onto the TCP's z.
+    let x_to_z = nalgebra::UnitQuaternion::from_axis_angle(
+        &nalgebra::Vector3::y_axis(),
+        -std::f64::consts::FRAC_PI_2,
+    );
+    let mut out = Vec::new();
+    for t in 0..rt.blob.payload.part_types.len() {
+        let pt = rt
+            .blob
+            .part_type(t)
+            .with_context(|| format!("part type {t} of {}", path.display()))?;
+        for l in 0..world.locations.len() {
+            let part = world.part_pose_at(l);
+            for g in &pt.grasps {
+                let tcp = part * pose_from_array(*g).context("a grasp of the blob")?;
+                let arrow = Pose::from_parts(tcp.translation, tcp.rotation * x_to_z);
+                let id = out.len() as i32;
+                out.push(marker(
+                    &format!("grasps {}", pt.name),
+                    id,
+                    ARROW,
+                    "map",
+                    &arrow,
+                    [0.12, 0.015, 0.015],
+                    rgba(0.6, 0.2, 0.8, 0.9),
+                ));
+            }
+        }
+    }
+    Ok(out)
 }
 
 fn pose(p: &[f64; 7], demonstration: &str) -> anyhow::Result<Pose> {

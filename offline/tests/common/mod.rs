@@ -4,13 +4,11 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-/// Runs `prf` with `args` and `-o dir`; returns its standard output (panics with both
-/// outputs when it fails).
-pub fn run_prf(args: &[&str], dir: &std::path::Path) -> String {
+/// Runs `prf` with `args`; returns its standard output (panics with both outputs when it
+/// fails).
+pub fn prf_stdout<S: AsRef<std::ffi::OsStr> + std::fmt::Debug>(args: &[S]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_prf"))
         .args(args)
-        .arg("-o")
-        .arg(dir)
         .output()
         .expect("start prf");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
@@ -20,6 +18,14 @@ pub fn run_prf(args: &[&str], dir: &std::path::Path) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     stdout
+}
+
+/// Runs `prf` with `args` and `-o dir`; returns its standard output.
+pub fn run_prf(args: &[&str], dir: &std::path::Path) -> String {
+    let mut all: Vec<std::ffi::OsString> = args.iter().map(|a| a.into()).collect();
+    all.push("-o".into());
+    all.push(dir.into());
+    prf_stdout(&all)
 }
 
 /// Asserts that every `dir/NAME.svg` and `dir/NAME.png` holds more than a kilobyte.
