@@ -69,30 +69,32 @@ pub fn save(chart: &impl Chart, stem: &Path) -> Result<[PathBuf; 2]> {
     register_font()?;
     let svg = stem.with_extension("svg");
     let png = stem.with_extension("png");
-    let temp = |p: &Path| {
-        prf_files::atomic::temp_beside(p).with_context(|| format!("writing {}", p.display()))
-    };
-    {
-        let tmp = temp(&svg)?;
-        let root = SVGBackend::new(tmp.path(), chart.size()).into_drawing_area();
-        chart.draw(&root)?;
-        root.present()
-            .with_context(|| format!("writing {}", svg.display()))?;
-        drop(root);
-        prf_files::atomic::persist(tmp, &svg)
-            .with_context(|| format!("writing {}", svg.display()))?;
-    }
-    {
-        let tmp = temp(&png)?;
-        let root = BitMapBackend::new(tmp.path(), chart.size()).into_drawing_area();
-        chart.draw(&root)?;
-        root.present()
-            .with_context(|| format!("writing {}", png.display()))?;
-        drop(root);
-        prf_files::atomic::persist(tmp, &png)
-            .with_context(|| format!("writing {}", png.display()))?;
-    }
+    let size = chart.size();
+    atomically(&svg, |p| {
+        present(chart, SVGBackend::new(p, size).into_drawing_area())
+    })?;
+    atomically(&png, |p| {
+        present(chart, BitMapBackend::new(p, size).into_drawing_area())
+    })?;
     Ok([svg, png])
+}
+
+/// Runs `write` on a temporary path beside `target`, then renames it over `target`.
+fn atomically(target: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let context = || format!("writing {}", target.display());
+    let tmp = prf_files::atomic::temp_beside(target).with_context(context)?;
+    write(tmp.path()).with_context(context)?;
+    prf_files::atomic::persist(tmp, target).with_context(context)
+}
+
+/// Draws `chart` on `root` and writes it out.
+fn present<DB: DrawingBackend>(chart: &impl Chart, root: DrawingArea<DB, Shift>) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart.draw(&root)?;
+    root.present()?;
+    Ok(())
 }
 
 /// The range of `values` with 5 % padding (a unit range when they are all equal or none).
