@@ -11,7 +11,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use prf_files::dataset::Sample;
 use prf_shared::field::{DistanceField, Field};
-use prf_shared::kinematics::{ArmKinematics, platform_pose};
+use prf_shared::kinematics::{ArmKinematics, arm_base_pose, platform_pose};
 use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
 
@@ -83,17 +83,28 @@ fn bounds(pts: &[(f64, f64)]) -> (f64, f64, f64, f64) {
     )
 }
 
+/// The size a part of type `kind` is drawn with: its world size, or a 5 cm cube for a type the
+/// world does not size.
+pub fn drawn_part_size(world: &prf_sim::world::World, kind: &str) -> [f64; 3] {
+    let size = prf_sim::navigation::part_size(world, kind);
+    if size.iter().all(|s| *s > 0.0) {
+        size
+    } else {
+        [0.05; 3]
+    }
+}
+
 /// The robot at one instant: its collision spheres (world centre, radius) and platform box.
-struct Pose3 {
+struct RobotOutline {
     spheres: Vec<(Vector3<f64>, f64)>,
     platform: Cuboid,
 }
 
-fn robot_at(model: &RobotModel, s: &Sample) -> Pose3 {
+fn robot_at(model: &RobotModel, s: &Sample) -> RobotOutline {
     let base = platform_pose(s.base);
     let kin = ArmKinematics::new(model, &s.arm.into());
     let mut centres = [Vector3::zeros(); MAX_SPHERES];
-    kin.sphere_centres_in(model, &(base * model.mount), &mut centres);
+    kin.sphere_centres_in(model, &arm_base_pose(model, s.base), &mut centres);
     let spheres = model
         .spheres
         .iter()
@@ -101,7 +112,7 @@ fn robot_at(model: &RobotModel, s: &Sample) -> Pose3 {
         .map(|(sp, c)| (*c, sp.radius))
         .collect();
     let b = &model.platform;
-    Pose3 {
+    RobotOutline {
         spheres,
         platform: Cuboid {
             centre: base.transform_point(&b.centre.into()).coords,
@@ -202,7 +213,7 @@ impl Chart for ProgramView<'_> {
     where
         DB::ErrorType: 'static,
     {
-        let keyframes: Vec<(f64, Pose3)> = self
+        let keyframes: Vec<(f64, RobotOutline)> = self
             .keyframe_indices()
             .into_iter()
             .map(|i| {
@@ -214,8 +225,7 @@ impl Chart for ProgramView<'_> {
             .samples
             .iter()
             .map(|s| {
-                let p = platform_pose(s.base)
-                    * self.model.mount
+                let p = arm_base_pose(self.model, s.base)
                     * ArmKinematics::new(self.model, &s.arm.into()).tcp;
                 self.view.project(&p.translation.vector)
             })

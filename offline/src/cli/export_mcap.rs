@@ -7,10 +7,10 @@ use prf_files::bag::messages::{ARROW, CUBE, Marker};
 use prf_files::dataset::Dataset;
 use prf_files::robot::{self, ChainNames};
 use prf_offline::export_mcap::{Exporter, T0, marker, program_risk, rgba};
+use prf_offline::view::drawn_part_size;
 use prf_runtime::RuntimeConfig;
 use prf_runtime::plan::Plan;
 use prf_shared::se3::{Pose, pose_from_array};
-use prf_sim::navigation::part_size;
 use prf_sim::tasks::FloorTask;
 use prf_sim::world::World;
 use prf_sim::world::geometry::Cell;
@@ -86,11 +86,6 @@ fn obstacles(world: &World) -> Vec<Marker> {
 
 /// A part at `start` (blue) and its goal (green).
 fn part_markers(id: i32, size: [f64; 3], start: &Pose, goal: &Pose) -> [Marker; 2] {
-    let size = if size.iter().all(|s| *s > 0.0) {
-        size
-    } else {
-        [0.05; 3]
-    };
     [
         marker(
             "part",
@@ -146,7 +141,7 @@ pub fn program(
         }
     }
     x.markers("/prf/obstacles", obstacles(world))?;
-    let size = part_size(world, &ft.part.1);
+    let size = drawn_part_size(world, &ft.part.1);
     x.markers(
         "/prf/parts",
         part_markers(0, size, &ft.part_pose, &ft.goal).to_vec(),
@@ -174,7 +169,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
                     frames.push((l.id.clone(), pose(&l.pose, &d.id)?));
                 }
             }
-            let size = part_size(&world, &d.task.part.kind);
+            let size = drawn_part_size(&world, &d.task.part.kind);
             let (start, goal) = (pose(&d.task.part.pose, &d.id)?, pose(&d.task.goal, &d.id)?);
             parts.extend(part_markers(i as i32, size, &start, &goal));
             let every = d.samples.windows(2).next().map_or(1, |w| {

@@ -5,11 +5,10 @@ use crate::cli::args::{TaskArgs, WorldArgs, read_blob, runtime};
 use anyhow::{Context, bail};
 use nalgebra::Vector3;
 use prf_offline::plots::save;
-use prf_offline::view::{Cuboid, PlacedField, ProgramView, Projection};
+use prf_offline::view::{Cuboid, PlacedField, ProgramView, Projection, drawn_part_size};
 use prf_runtime::RuntimeConfig;
 use prf_runtime::plan::plan;
 use prf_shared::se3::Pose;
-use prf_sim::navigation::part_size;
 use prf_sim::world::geometry::Cell;
 use std::path::PathBuf;
 
@@ -33,11 +32,6 @@ pub struct Args {
 }
 
 fn cuboid(pose: &Pose, size: [f64; 3]) -> Cuboid {
-    let size = if size.iter().all(|s| *s > 0.0) {
-        size
-    } else {
-        [0.05; 3]
-    };
     Cuboid {
         centre: pose.translation.vector,
         yaw: pose.rotation.euler_angles().2,
@@ -79,7 +73,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             });
         }
     }
-    let size = part_size(&world, &ft.part.1);
+    let size = drawn_part_size(&world, &ft.part.1);
     let part = [cuboid(&ft.part_pose, size), cuboid(&ft.goal, size)];
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let j = p.skills.j;
