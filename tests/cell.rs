@@ -544,8 +544,16 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
                 let detected_ms = match who {
                     Stalled::Firmware => {
                         assert!(fault.contains("firmware-sim silent"), "{fault}");
+                        // The silence runs from the last joint state published before the
+                        // stop (the signal lands after the test reads its clock).
+                        let last = s
+                            .states
+                            .iter()
+                            .rfind(|m| m.t_ns < s.continued)
+                            .expect("joint states before the stall")
+                            .t_ns;
                         let at = r["fault_t_ns"].as_u64().unwrap();
-                        (at - s.stopped) as f64 * 1e-6
+                        (at - last) as f64 * 1e-6
                     }
                     Stalled::Cell => {
                         assert!(fault.contains("watchdog"), "{fault}");
