@@ -121,3 +121,41 @@ fn stretched_arm_is_singular() {
     assert!(kernel(&jac(&model, &JointVector::zeros())).manipulability < 1e-12);
     assert!(kernel(&jac(&model, &JointVector::from(model.home))).manipulability > 0.05);
 }
+
+#[test]
+fn the_short_chain_qr_agrees_with_the_textbook_loops() {
+    use prf_shared::nullspace::{JacobianQr, baseline};
+    let model = RobotModel::kmr_iiwa14();
+    let mut rng = StdRng::seed_from_u64(11);
+    let v = Vector6::new(0.1, -0.2, 0.05, 0.3, 0.0, -0.1);
+    let close = |a: &JointVector, b: &JointVector| (a - b).norm() <= 1e-12 * b.norm().max(1.0);
+    for n in 0..2000 {
+        let q = JointVector::from_fn(|i, _| {
+            let j = &model.joints[i];
+            rng.random_range(j.lower..j.upper)
+        });
+        let mut j = jac(&model, &q);
+        if n % 10 == 0 {
+            // Rank deficient: a repeated row (and a zero column now and then).
+            let row = j.row(0).into_owned();
+            j.set_row(3, &row);
+        }
+        if n % 50 == 0 {
+            j.column_mut(n % 7).fill(0.0);
+        }
+        let (new, old) = (JacobianQr::new(&j), baseline::JacobianQr::new(&j));
+        let (ko, po) = (old.kernel(), old.pinv_apply(&v));
+        let (kn, pn) = new.kernel_and_pinv(&v);
+        assert_eq!(kn, new.kernel());
+        assert_eq!(pn, new.pinv_apply(&v));
+        let w = ko.manipulability;
+        assert!((kn.manipulability - w).abs() <= 1e-12 * w.max(1e-3), "{n}");
+        if w > 1e-3 {
+            assert!(close(&kn.direction, &ko.direction), "{n}");
+        }
+        match (pn, po) {
+            (Some(a), Some(b)) if w > 1e-3 => assert!(close(&a, &b), "{n}: {a:?} {b:?}"),
+            (a, b) => assert_eq!(a.is_none(), b.is_none(), "{n}"),
+        }
+    }
+}

@@ -11,6 +11,7 @@ use crate::cli::child::{ChildGuard, spawn_firmware};
 use anyhow::{Context, Result, anyhow, bail};
 use prf_host::cell::{Cell, CellConfig};
 use prf_host::ideal::execute;
+use prf_host::pacing::Wait;
 use prf_host::stats::percentiles;
 use prf_ipc::clock::now_ns;
 use prf_ipc::link;
@@ -34,10 +35,16 @@ pub struct Args {
     /// Messages per transport in the latency comparison (sent at 1 kHz).
     #[arg(long, default_value_t = 5000)]
     pub messages: u64,
-    /// Seconds of the 1 kHz loop against firmware-sim.
+    /// Seconds of the 1 kHz loop against firmware-sim, per pacing (three pacings).
     #[arg(long, default_value_t = 60.0)]
     pub loop_seconds: f64,
+    /// Busy-wait this long before each tick in the real-time pacing (µs).
+    #[arg(long, default_value_t = 0)]
+    pub spin_us: u64,
 }
+
+/// SCHED_FIFO priority of the loop thread in the real-time pacing.
+const REALTIME_PRIORITY: i32 = 80;
 
 /// The receiving side of the latency comparison (a child process of `prf bench-cell`).
 #[derive(clap::Args, Debug)]
@@ -256,17 +263,60 @@ pub fn run(a: &Args) -> Result<()> {
     };
     let mut cell = Cell::connect(cfg, &rt)?;
     println!(
-        "\n1 kHz host cell loop against firmware-sim for ≥ {:.0} s (task {} repeated):",
+        "\n1 kHz host cell loop against firmware-sim, ≥ {:.0} s per pacing (task {} repeated):",
         a.loop_seconds,
         ft.label()
     );
+    let spin_us = a.spin_us;
+    let variants = [
+        (Wait::AlarmThread, None),
+        (Wait::InThread { spin_us: 0 }, None),
+        (Wait::InThread { spin_us }, Some(REALTIME_PRIORITY)),
+    ];
+    let mut rows = Vec::new();
+    for (wait, realtime) in variants {
+        (cell.cfg.wait, cell.cfg.realtime) = (wait, realtime);
+        rows.push(loop_figures(&mut cell, &rt, &program, &ft, a.loop_seconds)?);
+    }
+    cell.shutdown()?;
+    println!(
+        "\n  {:<72} {:>8} {:>8} {:>9}",
+        "pacing (wake-up lateness, µs; medians over the runs)", "p50", "p99", "misses %"
+    );
+    for r in &rows {
+        println!(
+            "  {:<72} {:>8.1} {:>8.1} {:>9.3}",
+            r.pacing, r.late_p50, r.late_p99, r.miss_percent
+        );
+    }
+    Ok(())
+}
+
+/// The loop's figures under one pacing.
+struct LoopFigures {
+    pacing: String,
+    late_p50: f64,
+    late_p99: f64,
+    miss_percent: f64,
+}
+
+/// Runs the program repeatedly for at least `seconds` with the cell's current pacing.
+fn loop_figures(
+    cell: &mut Cell,
+    rt: &prf_runtime::Runtime<'_>,
+    program: &prf_runtime::program::Program,
+    ft: &FloorTask,
+    seconds: f64,
+) -> Result<LoopFigures> {
     let (mut ticks, mut misses, mut total) = (0u64, 0u64, 0.0);
-    while total < a.loop_seconds {
+    let (mut p50, mut p99, mut pacing) = (Vec::new(), Vec::new(), String::new());
+    while total < seconds {
         let a0 = allocations();
-        let r = cell.execute(&rt, &program, &ft.home)?;
+        let r = cell.execute(rt, program, &ft.home)?;
         let per_tick = (allocations() - a0) as f64 / r.ticks.max(1) as f64;
         println!(
-            "  {}; process-wide (every thread, start-up included) {per_tick:.2} allocations per tick",
+            "  [{}] {}; process-wide (every thread, start-up included) {per_tick:.2} allocations per tick",
+            r.pacing,
             r.summary()
         );
         if let Some(f) = &r.fault {
@@ -275,13 +325,21 @@ pub fn run(a: &Args) -> Result<()> {
         ticks += r.ticks;
         misses += r.deadline_misses;
         total += r.duration_s;
+        p50.push(r.wake_late_us[0]);
+        p99.push(r.wake_late_us[1]);
+        pacing = r.pacing;
     }
-    cell.shutdown()?;
+    let miss_percent = misses as f64 / ticks as f64 * 100.0;
     println!(
-        "  total: {ticks} ticks in {total:.1} s, {misses} deadline misses ({:.3} %)",
-        misses as f64 / ticks as f64 * 100.0
+        "  total: {ticks} ticks in {total:.1} s, {misses} deadline misses ({miss_percent:.3} %)"
     );
-    Ok(())
+    let median = |v: &mut Vec<f64>| percentiles(v)[0];
+    Ok(LoopFigures {
+        pacing,
+        late_p50: median(&mut p50),
+        late_p99: median(&mut p99),
+        miss_percent,
+    })
 }
 
 /// The two Ruckig bindings' tracking interface, for timing them side by side.

@@ -43,6 +43,48 @@ impl TaskArgs {
 }
 
 /// The cell's world file.
+/// How the host cell's 1 kHz loop is paced.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PacingArgs {
+    /// How the loop waits for its tick: in its own thread (clock_nanosleep to the absolute
+    /// tick time) or woken by an alarm thread (embassy-time's std driver design).
+    #[arg(long, value_enum, default_value = "in-thread")]
+    pub wait: WaitKind,
+    /// With --wait in-thread: sleep to this many µs before each tick, then busy-wait.
+    #[arg(long, default_value_t = 0)]
+    pub spin_us: u64,
+    /// Run the loop thread as SCHED_FIFO (priority 1–99, default 80) with memory locked,
+    /// where the process may; the report says what was granted.
+    #[arg(
+        long,
+        value_name = "PRIORITY",
+        num_args = 0..=1,
+        default_missing_value = "80",
+        value_parser = clap::value_parser!(i32).range(1..=99)
+    )]
+    pub realtime: Option<i32>,
+}
+
+/// `--wait` values.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WaitKind {
+    InThread,
+    AlarmThread,
+}
+
+impl PacingArgs {
+    /// Sets the cell's pacing.
+    pub fn apply(&self, cfg: &mut prf_host::cell::CellConfig) {
+        cfg.wait = match self.wait {
+            WaitKind::InThread => prf_host::pacing::Wait::InThread {
+                spin_us: self.spin_us,
+            },
+            WaitKind::AlarmThread => prf_host::pacing::Wait::AlarmThread,
+        };
+        cfg.realtime = self.realtime;
+    }
+}
+
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct WorldArgs {
     /// World file (JSON: floor plan, location poses, the platform's home, obstacles, parts);

@@ -1,7 +1,7 @@
 //! `prf run`: plan one task with the runtime and execute it in real time on the host cell,
 //! against a running `firmware-sim` (or one started for the run with `--spawn-firmware`).
 
-use crate::cli::args::{TaskArgs, WorldArgs, read_blob, runtime};
+use crate::cli::args::{PacingArgs, TaskArgs, WorldArgs, read_blob, runtime};
 use crate::cli::child::{ChildGuard, spawn_firmware};
 use anyhow::{Context, bail};
 use prf_host::cell::{Cell, CellConfig};
@@ -17,6 +17,8 @@ pub struct Args {
     pub task: TaskArgs,
     #[command(flatten)]
     pub world: WorldArgs,
+    #[command(flatten)]
+    pub pacing: PacingArgs,
     /// Cell name: the iceoryx2 services are prf/<cell>/…; must match firmware-sim's --cell.
     #[arg(long, default_value = "cell")]
     pub cell: String,
@@ -67,6 +69,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     cfg.dead_after_ms = a.dead_after;
     cfg.silent_after_ms = a.silent_after;
     cfg.stop_after = a.stop_after.map(std::time::Duration::from_secs_f64);
+    a.pacing.apply(&mut cfg);
     let mut cell = Cell::connect(cfg, &rt)?;
     println!(
         "task {}: J* = {:.1} mm, {} segments; running on cell {:?}",
@@ -84,6 +87,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     println!("{}", report.summary());
+    println!("paced by {}", report.pacing);
     match &report.fault {
         Some(f) => bail!("task {}: {f}", ft.label()),
         None if report.stopped => {

@@ -9,7 +9,7 @@
 //! (a setpoint published after its 1 ms period ended) are counted, never hidden.
 
 use crate::liveness::Liveness;
-use crate::{pacing, stats};
+use crate::{pacing, realtime, stats};
 use embassy_time::{Duration, Instant, Ticker};
 use prf_ipc::clock::now_ns;
 use prf_ipc::link::{self, CellPorts, Ipc, IpcError};
@@ -58,6 +58,11 @@ pub struct CellConfig {
     /// Allocations so far on the calling thread, if the binary counts them: the report then
     /// gives the loop's own ([`CellReport::loop_allocations`]).
     pub alloc_probe: Option<fn() -> u64>,
+    /// How the loop thread waits for its tick.
+    pub wait: pacing::Wait,
+    /// Run the loop thread as `SCHED_FIFO` at this priority with memory locked, where the
+    /// process may (it falls back to normal scheduling otherwise; the report says which).
+    pub realtime: Option<i32>,
 }
 
 impl CellConfig {
@@ -70,6 +75,8 @@ impl CellConfig {
             connect_timeout: std::time::Duration::from_secs(5),
             stop_after: None,
             alloc_probe: None,
+            wait: pacing::Wait::default(),
+            realtime: None,
         }
     }
 }
@@ -109,6 +116,8 @@ pub struct CellReport {
     /// Allocations on the loop's thread from its first tick to its last (with
     /// [`CellConfig::alloc_probe`]).
     pub loop_allocations: Option<u64>,
+    /// How the loop was paced: the wait and what real-time scheduling was granted.
+    pub pacing: String,
     /// Peak limit ratios of the emitted stream (1 ms finite differences).
     #[serde(serialize_with = "ratios_json")]
     pub emitted: LimitRatios,
@@ -270,7 +279,12 @@ impl Cell {
         let period = Duration::from_hz(1000);
         let mut timing = Timing::new();
         let mut report = CellReport::default();
-        let parker = pacing::Parker::new();
+        let realtime = self.cfg.realtime.map(realtime::RealTime::enter);
+        let parker = pacing::Parker::new(self.cfg.wait);
+        report.pacing = match &realtime {
+            Some(r) => format!("{}; {}", self.cfg.wait, r.status),
+            None => format!("{}; normal scheduling", self.cfg.wait),
+        };
         let mut last_rx = std::time::Instant::now();
         let mut asked = None;
         let mut seen_sp = 0u64;
@@ -337,6 +351,8 @@ impl Cell {
             }
         }
         report.loop_allocations = probe.zip(allocations_before).map(|(f, a)| f() - a);
+        drop(parker);
+        drop(realtime);
         report.ticks = k;
         report.duration_s = k as f64 * 1e-3;
         (report.shaped, report.max_shaping) = stage.shaped();

@@ -4,7 +4,9 @@
 //!   Ruckig output stage over iceoryx2 to the joint controller (receive → tick → output stage →
 //!   send);
 //! - [`liveness`]: whether the controller's process is alive, asked off the loop;
-//! - [`pacing`]: embassy-time's `Ticker` without an async executor;
+//! - [`pacing`]: embassy-time's `Ticker` without an async executor, optionally real-time;
+//! - [`realtime`]: `SCHED_FIFO` and `mlockall` for the loop thread, where allowed;
+//! - [`time_driver`]: the embassy-time driver (CLOCK_MONOTONIC, absolute sleeps);
 //! - [`ideal`]: a program run tick by tick on the runtime's ideal cell (`prf plan --export`,
 //!   tests);
 //! - [`stats`]: percentiles of timing samples.
@@ -13,4 +15,6 @@ pub mod cell;
 pub mod ideal;
 pub mod liveness;
 pub mod pacing;
+pub mod realtime;
 pub mod stats;
+pub mod time_driver;
