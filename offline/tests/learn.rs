@@ -517,3 +517,57 @@ fn the_lower_bound_within_a_ball_is_below_every_lookup_in_it() {
         tight * 1e3
     );
 }
+
+/// Anchored lookups (a hint that settles a moving point without reading the field while it
+/// stays in its cell and within its slack) against full lookups, along every demonstrated
+/// sphere path and along the same paths pushed 0–15 cm off, with rising stops.
+#[test]
+fn anchored_lookups_agree_with_full_lookups() {
+    use prf_shared::field::Hint;
+    use prf_shared::robot::MAX_SPHERES;
+    let f = fixture();
+    let mut rng = StdRng::seed_from_u64(5);
+    let (mut lookups, mut skipped) = (0usize, 0usize);
+    for d in f.dataset.demonstrations.iter().step_by(4) {
+        for (t, base, path) in arm_instances(f, d) {
+            let field = f.knowledge.location_types[t]
+                .field
+                .as_ref()
+                .unwrap()
+                .field();
+            let push = Vector3::new(
+                rng.random_range(-0.15..0.15),
+                rng.random_range(-0.15..0.15),
+                rng.random_range(-0.15..0.15),
+            );
+            for offset in [Vector3::zeros(), push] {
+                let mut hints = [Hint::default(); MAX_SPHERES];
+                let mut level = rng.random_range(-0.05..0.0);
+                for q in &path {
+                    let kin = ArmKinematics::new(&f.model, &JointVector::from(*q));
+                    let mut centres = [Vector3::zeros(); MAX_SPHERES];
+                    kin.sphere_centres_in(&f.model, &base, &mut centres);
+                    level += rng.random_range(0.0..0.0005);
+                    for ((s, c), hint) in f.model.spheres.iter().zip(&centres).zip(&mut hints) {
+                        let p = c + offset;
+                        let stop = level - s.radius;
+                        let full = field.distance(&p);
+                        let before = *hint;
+                        let v = field.distance_upto(&p, stop, hint);
+                        lookups += 1;
+                        skipped += usize::from(before == *hint && v <= stop);
+                        if full > stop {
+                            assert_eq!(v, full, "{p:?} stop {stop}");
+                        } else {
+                            assert!(v <= stop && v >= full, "{p:?}: {v} vs {full}, stop {stop}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        skipped > lookups / 4,
+        "{skipped} of {lookups} lookups settled by their anchor"
+    );
+}

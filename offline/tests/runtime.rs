@@ -6,6 +6,7 @@
 mod common;
 
 use common::stream_ratios;
+use nalgebra::Vector3;
 use prf_host::ideal::{Execution, execute};
 use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode};
 use prf_runtime::plan::{PlanError, plan};
@@ -17,6 +18,7 @@ use prf_runtime::skill_plan::{
 use prf_runtime::task::{Missing, TaskError};
 use prf_runtime::{LoadError, Runtime};
 use prf_shared::JointVector;
+use prf_shared::field::DistanceField;
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::rdmp::RdmpRun;
 use prf_shared::risk::RiskAccumulator;
@@ -203,17 +205,26 @@ fn brute_force_risk(
     let rdmp = rdmp.time_scaled(timing.scale);
     let mut run = RdmpRun::new(model, &rdmp, &q0, goal, &rt.config.rdmp).ok()?;
     run.set_steps(timing.steps as usize);
-    let mut acc = RiskAccumulator::default();
+    // Eq. 16 with a full lookup of every sphere at every configuration (no hints, no early
+    // stops), independent of the planner's accumulator.
+    let mut excess = f64::NEG_INFINITY;
+    let mut rate = |kin: &ArmKinematics| {
+        let mut centres = [Vector3::zeros(); prf_shared::robot::MAX_SPHERES];
+        kin.sphere_centres_in(model, base, &mut centres);
+        for (sphere, c) in model.spheres.iter().zip(&centres) {
+            excess = excess.max(side.field.distance(c) + sphere.radius);
+        }
+    };
     let mut kin = ArmKinematics::new(model, &q0);
-    acc.add(model, &side.field, base, &kin);
+    rate(&kin);
     while !run.finished() {
         let s = run.step(model, &rdmp, &rt.config.rdmp).ok()?;
         kin = ArmKinematics::new(model, &s.q);
-        acc.add(model, &side.field, base, &kin);
+        rate(&kin);
     }
     let missed = (kin.tcp.translation.vector - goal.translation.vector).norm() > REACH_POSITION
         || kin.tcp.rotation.angle_to(&goal.rotation) > REACH_ANGLE;
-    (!missed).then(|| acc.risk())
+    (!missed).then(|| prf_shared::risk::eta(excess))
 }
 
 /// The reduced knowledge base of the brute-force tests: risky candidates. Part1 from a CNC
@@ -351,6 +362,36 @@ fn skill_plan_equals_the_brute_force_grid() {
         risky > 0,
         "the reduced knowledge base should make some task risky"
     );
+}
+
+/// Anchored lookups change how much of the field is read, never a plan: every task of the
+/// example cell on the full knowledge base (risk-0 plans), and on the reduced one with the
+/// parts moved 2 cm and 8° (risky plans, rising levels), plans the same with them off.
+#[test]
+fn anchored_lookups_leave_every_plan_unchanged() {
+    let reduced = reduced_blob(&World::example());
+    for (bytes, world) in [
+        (full_blob(), World::example()),
+        (&reduced[..], shifted_world(0.02, 8.0)),
+    ] {
+        let anchored = Runtime::load(bytes).unwrap();
+        let config = prf_runtime::RuntimeConfig {
+            anchored_lookups: false,
+            ..Default::default()
+        };
+        let every = Runtime::load_with(bytes, config).unwrap();
+        for ft in world_tasks(&world) {
+            match (plan(&anchored, &ft.task()), plan(&every, &ft.task())) {
+                (Ok(a), Ok(b)) => {
+                    let label = ft.label();
+                    assert_eq!(a.skills.j.to_bits(), b.skills.j.to_bits(), "{label}");
+                    assert_eq!(a.skills.choice, b.skills.choice, "{label}");
+                    assert_eq!(a.skills.stats.steps, b.skills.stats.steps, "{label}");
+                }
+                (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{}", ft.label()),
+            }
+        }
+    }
 }
 
 /// Issue 22: with the part poses moved (2 cm and 8°: most tasks risky; 8 cm: the admissible

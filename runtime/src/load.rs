@@ -51,6 +51,9 @@ pub struct RuntimeConfig {
     pub risk_threshold: f64,
     /// The work skill planning may do per task (default: unlimited; the firmware sets one).
     pub plan_budget: crate::skill_plan::PlanBudget,
+    /// Risk lookups may be settled by the anchor of the sphere's last lookup (default); off,
+    /// every lookup reads the field (the benchmark's baseline). Risks are the same either way.
+    pub anchored_lookups: bool,
 }
 
 impl Default for RuntimeConfig {
@@ -59,6 +62,7 @@ impl Default for RuntimeConfig {
             rdmp: RdmpConfig::default(),
             risk_threshold: 0.0,
             plan_budget: crate::skill_plan::PlanBudget::UNLIMITED,
+            anchored_lookups: true,
         }
     }
 }
@@ -134,10 +138,14 @@ impl<'a> Runtime<'a> {
     pub fn workspace(&self, t: usize) -> Result<Option<Field<'a>>, LoadError> {
         let l = self.blob.location_type(t)?;
         match l.workspace {
-            Some(d) => Ok(Some(Field::new(&d).map_err(|error| BlobError::Field {
-                location_type: t,
-                error,
-            })?)),
+            Some(d) => Ok(Some(
+                Field::new(&d)
+                    .map_err(|error| BlobError::Field {
+                        location_type: t,
+                        error,
+                    })?
+                    .anchored(self.config.anchored_lookups),
+            )),
             None => Ok(None),
         }
     }

@@ -55,12 +55,22 @@ pub trait DistanceField {
 
 /// The lookup term that settled the last lookup of a point (a sphere centre along a
 /// trajectory): its cell and term (1–8: a corner; 9 + i: certificate i; 0: none). The next
-/// lookup tries it first if the point is still in that cell. Only the order of evaluation
-/// changes, never the result.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// lookup tries it first if the point is still in that cell.
+///
+/// It also anchors that lookup: the term's exact value v at the point x_a and the `stop` s_a
+/// it was settled against. Each term is 1-Lipschitz, so while the point stays in the cell and
+/// within s_a − v of x_a the field there is still ≤ s_a, and a lookup with a stop ≥ s_a is
+/// settled without reading the field. A hint belongs to one field.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Hint {
     cell: u32,
     term: u32,
+    /// x_a, the point of the anchoring lookup (location frame).
+    anchor: Vector3<f64>,
+    /// (s_a − v)², or 0 (no anchor).
+    slack2: f64,
+    /// s_a.
+    stop: f64,
 }
 
 /// Serialized form of a field (postcard); the byte arrays are borrowed from the blob.
@@ -134,6 +144,8 @@ pub struct Field<'a> {
     bricks: &'a [u8],
     nodes: &'a [u8],
     certificates: &'a [u8],
+    /// Whether lookups may be settled by their hint's anchor (see [`Hint`]).
+    anchored: bool,
 }
 
 /// |x − b| − r, or `stop` when that is at most `stop` (decided on squared distances, without
@@ -205,7 +217,15 @@ impl<'a> Field<'a> {
             bricks: d.bricks,
             nodes: d.nodes,
             certificates: d.certificates,
+            anchored: true,
         })
+    }
+
+    /// The same field with anchored lookups on or off. Off, every lookup reads the field
+    /// (the previous behaviour, the benchmark's baseline); the values that decide a risk are
+    /// the same either way.
+    pub fn anchored(self, anchored: bool) -> Self {
+        Field { anchored, ..self }
     }
 
     /// Node spacing h, m.
@@ -360,7 +380,11 @@ impl<'a> Field<'a> {
             let term = ((k ^ near) + 1) as u32;
             best = best.min(self.term(c, cell, term, x, stop));
             if best <= stop {
-                *hint = Hint { cell, term };
+                *hint = Hint {
+                    cell,
+                    term,
+                    ..Hint::default()
+                };
                 return best;
             }
         }
@@ -372,6 +396,7 @@ impl<'a> Field<'a> {
                 *hint = Hint {
                     cell,
                     term: 9 + i as u32,
+                    ..Hint::default()
                 };
                 return best;
             }
@@ -423,7 +448,23 @@ impl DistanceField for Field<'_> {
     fn distance_upto(&self, p: &Vector3<f64>, stop: f64, hint: &mut Hint) -> f64 {
         let inside = (0..3).all(|a| p[a] >= self.origin[a] && p[a] <= self.top[a]);
         if inside {
-            return self.distance_in_cell_upto(self.cell_at(p), p, stop, hint);
+            let c = self.cell_at(p);
+            let cell = self.cell_index(c);
+            if self.anchored
+                && hint.cell == cell
+                && hint.stop <= stop
+                && (p - hint.anchor).norm_squared() < hint.slack2
+            {
+                return hint.stop;
+            }
+            let v = self.distance_in_cell_upto(c, p, stop, hint);
+            if self.anchored && v <= stop && hint.cell == cell && hint.term != 0 {
+                let exact = self.term(c, cell, hint.term, p, f64::NEG_INFINITY);
+                let slack = stop - exact;
+                (hint.anchor, hint.stop) = (*p, stop);
+                hint.slack2 = if slack > 0.0 { slack * slack } else { 0.0 };
+            }
+            return v;
         }
         // Outside the grid box (or NaN): the nearest box point's value plus the distance to it.
         let q = p.sup(&self.origin).inf(&self.top);
@@ -431,6 +472,7 @@ impl DistanceField for Field<'_> {
         if !outside.is_finite() {
             return f64::NAN;
         }
+        hint.slack2 = 0.0;
         self.distance_in_cell_upto(self.cell_at(&q), &q, stop - outside, hint) + outside
     }
 }

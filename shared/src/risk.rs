@@ -23,7 +23,7 @@ pub fn eta(x: f64) -> f64 {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RiskAccumulator {
     excess: f64,
-    /// Per sphere, the lookup term that settled it last (evaluation order only).
+    /// Per sphere, the lookup that settled it last (its term and anchor).
     hints: [Hint; MAX_SPHERES],
 }
 
@@ -42,8 +42,9 @@ impl RiskAccumulator {
     ///
     /// Only spheres that can raise the risk are looked up in full: a sphere whose lookup
     /// already shows sdf + r ≤ max(excess so far, 0) cannot change η(max), so the lookup
-    /// stops there ([`DistanceField::distance_upto`]). The risk is exact; the excess is exact
-    /// once positive and otherwise an upper bound ≤ 0.
+    /// stops there ([`DistanceField::distance_upto`]); a sphere still within the slack of its
+    /// last settled lookup is not looked up at all (see [`Hint`]). The risk is exact; the
+    /// excess is exact once positive and otherwise an upper bound ≤ 0.
     pub fn add(
         &mut self,
         model: &RobotModel,
@@ -55,7 +56,15 @@ impl RiskAccumulator {
         kin.sphere_centres_in(model, arm_base, &mut centres);
         for ((s, p), hint) in model.spheres.iter().zip(&centres).zip(&mut self.hints) {
             let level = eta(self.excess);
-            let e = field.distance_upto(p, level - s.radius, hint) + s.radius;
+            let stop = level - s.radius;
+            let d = field.distance_upto(p, stop, hint);
+            // Settled at or below the stop, the sphere cannot raise the risk: its bound (which
+            // may be the stop itself, and (level − r) + r can round above level) is capped.
+            let e = if d <= stop {
+                (d + s.radius).min(level)
+            } else {
+                d + s.radius
+            };
             if e.is_nan() {
                 self.excess = f64::INFINITY;
                 break;
