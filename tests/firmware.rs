@@ -2,7 +2,7 @@
 //! Cortex-M7 under `qemu-system-arm -machine mps2-an500 -icount shift=0`, where SysTick counts
 //! are deterministic instruction counts. For every task of the example cell it must stay
 //! within the timing and RAM budgets and produce the host runtime's setpoint stream (same
-//! blob, same task block) within 1e-9 rad. `scripts/firmware.sh` installs QEMU and the
+//! blob, same task block) bit for bit. `scripts/firmware.sh` installs QEMU and the
 //! toolchain when missing.
 
 mod common;

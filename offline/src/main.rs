@@ -71,7 +71,7 @@ enum Command {
     BenchCell(bench::cell::Args),
     /// Run tasks on the cell-controller firmware (Cortex-M7 under QEMU mps2-an500, blob flashed
     /// into its region) and check each against the host: executor tick, planning and RAM
-    /// budgets, and the setpoint stream within 1e-9 rad. Installs QEMU and the toolchain if
+    /// budgets, and the setpoint stream bit for bit. Installs QEMU and the toolchain if
     /// missing.
     Firmware(firmware::Args),
     /// Receiving side of `prf bench-cell`'s latency comparison.

@@ -49,7 +49,7 @@ use prf_shared::motion::{Goal, GoalContext, MotionClass, PhysicalState};
 use prf_shared::rdmp::{Rdmp, RdmpError, RdmpRun};
 use prf_shared::risk::{RiskAccumulator, eta};
 use prf_shared::robot::LINK_TOOL;
-use prf_shared::se3::{Pose, pose_from_array};
+use prf_shared::se3::{Pose, angle_between, pose_from_array};
 pub use prf_shared::timing::{ArmTiming, MAX_TIME_SCALE};
 use prf_shared::timing::{TimingError, pace_observed};
 use prf_shared::{JointVector, NA, blob::MAX_AFFORDANCES};
@@ -312,7 +312,7 @@ pub fn evaluate_arm_motion_observed<S>(
     let ((acc, below, last, state), steps) = (paced.observer, paced.steps);
     let (position, angle) = (
         (last.translation.vector - goal.translation.vector).norm(),
-        last.rotation.angle_to(&goal.rotation),
+        angle_between(&last.rotation, &goal.rotation),
     );
     let evaluation = match paced.timing {
         Ok(_) if !(position <= REACH_POSITION && angle <= REACH_ANGLE) => Evaluation::Missed {
@@ -508,7 +508,7 @@ impl<'a> Side<'a> {
             for &(k, r, here) in &self.skills {
                 let demo = rt.blob.rdmp_goal(r as usize)?;
                 let d = (goal.translation.vector - demo.translation.vector).norm()
-                    + ROTATION_WEIGHT * goal.rotation.angle_to(&demo.rotation);
+                    + ROTATION_WEIGHT * angle_between(&goal.rotation, &demo.rotation);
                 // Capacity: `skills` has at most MAX_SKILLS entries.
                 let _ = order.push((!here, d, k));
             }

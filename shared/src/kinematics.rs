@@ -6,7 +6,7 @@
 use crate::robot::{LINK_TOOL, N_FRAMES, RobotModel};
 use crate::se3::Pose;
 use crate::{Jacobian, JointVector, NA};
-use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 /// Everything one kinematics evaluation yields at a configuration q_a.
 #[derive(Clone, Copy, Debug)]
@@ -19,11 +19,17 @@ pub struct ArmKinematics {
 
 impl ArmKinematics {
     /// Forward kinematics: T_i = T_{i−1} · origin_i · Rot(axis_i, q_i).
+    ///
+    /// Rot(a, θ) = [cos θ/2, a sin θ/2] with both from one `libm::sincos` (one range
+    /// reduction; the same bits on the host and on the controller).
     pub fn new(model: &RobotModel, q: &JointVector) -> Self {
         let mut frames = [Pose::identity(); N_FRAMES];
         for i in 0..NA {
             let j = &model.joints[i];
-            frames[i + 1] = frames[i] * j.origin * UnitQuaternion::from_axis_angle(&j.axis, q[i]);
+            let (s, c) = libm::sincos(0.5 * q[i]);
+            let a = j.axis.into_inner() * s;
+            let rot = UnitQuaternion::new_unchecked(Quaternion::new(c, a.x, a.y, a.z));
+            frames[i + 1] = frames[i] * j.origin * rot;
         }
         frames[LINK_TOOL] = frames[NA] * model.flange;
         let tcp = frames[LINK_TOOL] * model.tcp;
@@ -77,15 +83,21 @@ impl ArmKinematics {
 
 /// Pose of the platform base frame `b` in the world from q_m = [x, y, yaw].
 pub fn platform_pose(q_m: [f64; 3]) -> Pose {
+    let (s, c) = libm::sincos(0.5 * q_m[2]);
     Isometry3::from_parts(
         Translation3::new(q_m[0], q_m[1], 0.0),
-        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q_m[2]),
+        UnitQuaternion::new_unchecked(Quaternion::new(c, 0.0, 0.0, s)),
     )
 }
 
 /// [x, y, yaw] of a platform pose: the inverse of [`platform_pose`].
 pub fn planar(p: &Pose) -> [f64; 3] {
-    let yaw = p.rotation.euler_angles().2;
+    // Yaw of the Z-Y-X Euler angles, with libm's atan2 (the same bits on every platform).
+    let q = p.rotation.quaternion();
+    let yaw = libm::atan2(
+        2.0 * (q.w * q.k + q.i * q.j),
+        1.0 - 2.0 * (q.j * q.j + q.k * q.k),
+    );
     [p.translation.x, p.translation.y, yaw]
 }
 

@@ -32,27 +32,16 @@ pub struct Kernel {
     pub manipulability: f64,
 }
 
-/// Householder QR of Jᵀ (7×6), arranged for short dependency chains: per reflection the
-/// column norm and the products with the later columns are independent sums (each a
-/// three-level tree over the 7 rows), vᵀv = 2|α|(|a_kk| + |α|) needs no sum, and
-/// vᵀc = a_kᵀc − α c_k reuses them. Loops have fixed bounds (v_k is zero above row k).
-/// [`baseline::JacobianQr`] is the textbook loop it replaced.
+/// Householder QR of Jᵀ (7×6).
 #[derive(Clone, Copy, Debug)]
 pub struct JacobianQr {
-    /// Householder vectors v_k (zero above row k), H_k = I − β_k v_k v_kᵀ.
+    /// Householder vectors v_k (entries k..7 used), H_k = I − β_k v_k v_kᵀ.
     v: [[f64; 7]; 6],
     beta: [f64; 6],
     /// Upper-triangular R, row-major.
     r: [[f64; 6]; 6],
     /// det Q = (−1)^(number of reflections applied).
     det_q: f64,
-}
-
-/// Σ_{i ≥ from} x_i y_i, summed as a tree.
-#[inline(always)]
-fn dot_from(from: usize, x: &[f64; 7], y: &[f64; 7]) -> f64 {
-    let p: [f64; 7] = core::array::from_fn(|i| if i >= from { x[i] * y[i] } else { 0.0 });
-    ((p[0] + p[1]) + (p[2] + p[3])) + ((p[4] + p[5]) + p[6])
 }
 
 impl JacobianQr {
@@ -70,29 +59,23 @@ impl JacobianQr {
         let mut r = [[0.0; 6]; 6];
         let mut det_q = 1.0;
         for k in 0..6 {
-            let ak = a[k];
-            let mut gram = [0.0; 6];
-            for c in (k + 1)..6 {
-                gram[c] = dot_from(k, &ak, &a[c]);
-            }
-            let norm = libm::sqrt(dot_from(k, &ak, &ak));
-            let alpha = if ak[k] >= 0.0 { -norm } else { norm };
-            let mut vk: [f64; 7] = core::array::from_fn(|i| if i >= k { ak[i] } else { 0.0 });
+            let norm = libm::sqrt(a[k][k..].iter().map(|x| x * x).sum::<f64>());
+            let alpha = if a[k][k] >= 0.0 { -norm } else { norm };
+            let vk = &mut v[k];
+            vk[k..].copy_from_slice(&a[k][k..]);
             vk[k] -= alpha;
-            let vv = -2.0 * alpha * vk[k];
+            let vv: f64 = vk[k..].iter().map(|x| x * x).sum();
             if vv > 0.0 {
                 beta[k] = 2.0 / vv;
                 det_q = -det_q;
-                for c in (k + 1)..6 {
-                    let col = &mut a[c];
-                    let s = beta[k] * (gram[c] - alpha * col[k]);
-                    for i in 0..7 {
+                for col in a.iter_mut().skip(k + 1) {
+                    let s = beta[k] * (k..7).map(|i| vk[i] * col[i]).sum::<f64>();
+                    for i in k..7 {
                         col[i] -= s * vk[i];
                     }
                 }
             }
-            v[k] = vk;
-            r[k][k] = if vv > 0.0 { alpha } else { ak[k] };
+            r[k][k] = if vv > 0.0 { alpha } else { a[k][k] };
             for c in (k + 1)..6 {
                 r[k][c] = a[c][k];
             }
@@ -105,40 +88,10 @@ impl JacobianQr {
         for k in (0..6).rev() {
             if self.beta[k] != 0.0 {
                 let vk = &self.v[k];
-                let s = self.beta[k] * dot_from(k, vk, y);
-                for i in 0..7 {
+                let s = self.beta[k] * (k..7).map(|i| vk[i] * y[i]).sum::<f64>();
+                for i in k..7 {
                     y[i] -= s * vk[i];
                 }
-            }
-        }
-    }
-
-    /// y ← Q y and z ← Q z together (two independent chains).
-    fn apply_q2(&self, y: &mut [f64; 7], z: &mut [f64; 7]) {
-        for k in (0..6).rev() {
-            if self.beta[k] != 0.0 {
-                let vk = &self.v[k];
-                let s = self.beta[k] * dot_from(k, vk, y);
-                let t = self.beta[k] * dot_from(k, vk, z);
-                for i in 0..7 {
-                    y[i] -= s * vk[i];
-                    z[i] -= t * vk[i];
-                }
-            }
-        }
-    }
-
-    /// [`JacobianQr::kernel`] and [`JacobianQr::pinv_apply`] with one pass over Q.
-    pub fn kernel_and_pinv(&self, v: &Vector6<f64>) -> (Kernel, Option<JointVector>) {
-        let mut q7 = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
-        match self.r_transpose_solve(v) {
-            Some(mut y) => {
-                self.apply_q2(&mut q7, &mut y);
-                (self.oriented(q7), finite(y))
-            }
-            None => {
-                self.apply_q(&mut q7);
-                (self.oriented(q7), None)
             }
         }
     }
@@ -148,8 +101,10 @@ impl JacobianQr {
         (0..6).map(|k| self.r[k][k]).product()
     }
 
-    /// The unit kernel vector Q e_7, oriented as the generalized cross product.
-    fn oriented(&self, q7: [f64; 7]) -> Kernel {
+    /// Kernel of J, oriented as the generalized cross product of its rows.
+    pub fn kernel(&self) -> Kernel {
+        let mut q7 = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        self.apply_q(&mut q7);
         let det = self.det_q * self.det_r();
         let w = libm::fabs(det);
         let direction = if w > 0.0 {
@@ -163,16 +118,9 @@ impl JacobianQr {
         }
     }
 
-    /// Kernel of J, oriented as the generalized cross product of its rows.
-    pub fn kernel(&self) -> Kernel {
-        let mut q7 = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
-        self.apply_q(&mut q7);
-        self.oriented(q7)
-    }
-
-    /// [R⁻ᵀV; 0] by forward substitution; `None` if J is numerically rank deficient (a
-    /// diagonal entry of R below [`RANK_TOLERANCE`] × the largest one).
-    fn r_transpose_solve(&self, v: &Vector6<f64>) -> Option<[f64; 7]> {
+    /// Minimum-norm solution J⁺V = Q [R⁻ᵀV; 0] of J q̇ = V; `None` if J is numerically rank
+    /// deficient (a diagonal entry of R below [`RANK_TOLERANCE`] × the largest one).
+    pub fn pinv_apply(&self, v: &Vector6<f64>) -> Option<JointVector> {
         let scale = (0..6).map(|k| libm::fabs(self.r[k][k])).fold(0.0, f64::max);
         let mut y = [0.0; 7];
         for i in 0..6 {
@@ -183,23 +131,10 @@ impl JacobianQr {
             let s: f64 = (0..i).map(|k| self.r[k][i] * y[k]).sum();
             y[i] = (v[i] - s) / d;
         }
-        Some(y)
-    }
-
-    /// Minimum-norm solution J⁺V = Q [R⁻ᵀV; 0] of J q̇ = V; `None` if J is numerically rank
-    /// deficient (see [`JacobianQr::r_transpose_solve`]) or the result is not finite.
-    pub fn pinv_apply(&self, v: &Vector6<f64>) -> Option<JointVector> {
-        let mut y = self.r_transpose_solve(v)?;
         self.apply_q(&mut y);
-        finite(y)
+        let out = JointVector::from(y);
+        out.iter().all(|x| x.is_finite()).then_some(out)
     }
-}
-
-/// `y` as a joint vector if every entry is finite.
-fn finite(y: [f64; 7]) -> Option<JointVector> {
-    y.iter()
-        .all(|x| x.is_finite())
-        .then(|| JointVector::from(y))
 }
 
 /// Kernel of a 6×7 Jacobian (see the module documentation).
@@ -210,118 +145,4 @@ pub fn kernel(j: &Jacobian) -> Kernel {
 /// Minimum-norm solution J⁺V of J q̇ = V; `None` if J is numerically rank deficient.
 pub fn pinv_apply(j: &Jacobian, v: &Vector6<f64>) -> Option<JointVector> {
     JacobianQr::new(j).pinv_apply(v)
-}
-
-/// The previous QR, with loops over the used rows only: the benchmark's baseline and the
-/// tests' reference for [`JacobianQr`].
-#[doc(hidden)]
-pub mod baseline {
-    use super::{Kernel, RANK_TOLERANCE};
-    use crate::{Jacobian, JointVector};
-    use nalgebra::Vector6;
-
-    /// Householder QR of Jᵀ (7×6), the textbook loops.
-    #[derive(Clone, Copy, Debug)]
-    pub struct JacobianQr {
-        /// Householder vectors v_k (entries k..7 used), H_k = I − β_k v_k v_kᵀ.
-        v: [[f64; 7]; 6],
-        beta: [f64; 6],
-        /// Upper-triangular R, row-major.
-        r: [[f64; 6]; 6],
-        /// det Q = (−1)^(number of reflections applied).
-        det_q: f64,
-    }
-
-    impl JacobianQr {
-        /// The QR of Jᵀ.
-        pub fn new(j: &Jacobian) -> Self {
-            // a = Jᵀ, column-major by construction: a[c][row] is Jᵀ(row, c) = J(c, row).
-            let mut a = [[0.0; 7]; 6];
-            for (c, col) in a.iter_mut().enumerate() {
-                for (row, v) in col.iter_mut().enumerate() {
-                    *v = j[(c, row)];
-                }
-            }
-            let mut v = [[0.0; 7]; 6];
-            let mut beta = [0.0; 6];
-            let mut r = [[0.0; 6]; 6];
-            let mut det_q = 1.0;
-            for k in 0..6 {
-                let norm = libm::sqrt(a[k][k..].iter().map(|x| x * x).sum::<f64>());
-                let alpha = if a[k][k] >= 0.0 { -norm } else { norm };
-                let vk = &mut v[k];
-                vk[k..].copy_from_slice(&a[k][k..]);
-                vk[k] -= alpha;
-                let vv: f64 = vk[k..].iter().map(|x| x * x).sum();
-                if vv > 0.0 {
-                    beta[k] = 2.0 / vv;
-                    det_q = -det_q;
-                    for col in a.iter_mut().skip(k + 1) {
-                        let s = beta[k] * (k..7).map(|i| vk[i] * col[i]).sum::<f64>();
-                        for i in k..7 {
-                            col[i] -= s * vk[i];
-                        }
-                    }
-                }
-                r[k][k] = if vv > 0.0 { alpha } else { a[k][k] };
-                for c in (k + 1)..6 {
-                    r[k][c] = a[c][k];
-                }
-            }
-            JacobianQr { v, beta, r, det_q }
-        }
-
-        /// y ← Q y = H_0 ⋯ H_5 y.
-        fn apply_q(&self, y: &mut [f64; 7]) {
-            for k in (0..6).rev() {
-                if self.beta[k] != 0.0 {
-                    let vk = &self.v[k];
-                    let s = self.beta[k] * (k..7).map(|i| vk[i] * y[i]).sum::<f64>();
-                    for i in k..7 {
-                        y[i] -= s * vk[i];
-                    }
-                }
-            }
-        }
-
-        /// det R = ± sqrt(det(J Jᵀ)).
-        fn det_r(&self) -> f64 {
-            (0..6).map(|k| self.r[k][k]).product()
-        }
-
-        /// Kernel of J, oriented as the generalized cross product of its rows.
-        pub fn kernel(&self) -> Kernel {
-            let mut q7 = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
-            self.apply_q(&mut q7);
-            let det = self.det_q * self.det_r();
-            let w = libm::fabs(det);
-            let direction = if w > 0.0 {
-                JointVector::from(q7) * (if det > 0.0 { 1.0 } else { -1.0 })
-            } else {
-                JointVector::zeros()
-            };
-            Kernel {
-                direction,
-                manipulability: w,
-            }
-        }
-
-        /// Minimum-norm solution J⁺V = Q [R⁻ᵀV; 0] of J q̇ = V; `None` if J is numerically rank
-        /// deficient (a diagonal entry of R below [`RANK_TOLERANCE`] × the largest one).
-        pub fn pinv_apply(&self, v: &Vector6<f64>) -> Option<JointVector> {
-            let scale = (0..6).map(|k| libm::fabs(self.r[k][k])).fold(0.0, f64::max);
-            let mut y = [0.0; 7];
-            for i in 0..6 {
-                let d = self.r[i][i];
-                if !(libm::fabs(d) > RANK_TOLERANCE * scale) {
-                    return None;
-                }
-                let s: f64 = (0..i).map(|k| self.r[k][i] * y[k]).sum();
-                y[i] = (v[i] - s) / d;
-            }
-            self.apply_q(&mut y);
-            let out = JointVector::from(y);
-            out.iter().all(|x| x.is_finite()).then_some(out)
-        }
-    }
 }

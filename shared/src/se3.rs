@@ -110,6 +110,13 @@ pub fn log_near(r: &Rot, reference: &Vector3<f64>) -> Vector3<f64> {
     v + axis * (k * core::f64::consts::TAU)
 }
 
+/// The angle of the rotation between `a` and `b`, rad in [0, π] (nalgebra's `angle_to`, with
+/// libm's atan2: the same bits on every platform).
+pub fn angle_between(a: &Rot, b: &Rot) -> f64 {
+    let q = (a.inverse() * b).into_inner();
+    2.0 * libm::atan2(q.imag().norm(), libm::fabs(q.w))
+}
+
 /// Pose error `(p_d − p, log(R_d R⁻¹))` of `actual` with respect to `desired`, both in the same
 /// frame: the world-frame twist direction that moves `actual` onto `desired`.
 pub fn pose_error(desired: &Pose, actual: &Pose) -> (Vector3<f64>, Vector3<f64>) {

@@ -10,7 +10,7 @@ use nalgebra::{SMatrix, Vector6};
 use prf_host::stats::{percentiles, quantile};
 use prf_shared::dmp::DmpParams;
 use prf_shared::kinematics::ArmKinematics;
-use prf_shared::nullspace::{baseline, kernel, pinv_apply};
+use prf_shared::nullspace::{kernel, pinv_apply};
 use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpRun, integrate, null_space_coordinate};
 use prf_shared::robot::RobotModel;
 use prf_shared::{Jacobian, JointVector};
@@ -154,15 +154,6 @@ pub fn run(args: &Args) -> Result<()> {
         black_box(kernel(black_box(&jacobians[i])));
     });
     report("QR of Jᵀ → M(q), manipulability (ours)", &cof, "ns");
-    let cof_old = measure(secs, 256, || {
-        i = (i + 1) % jacobians.len();
-        black_box(baseline::JacobianQr::new(black_box(&jacobians[i])).kernel());
-    });
-    report("previous QR (textbook loops)", &cof_old, "ns");
-    println!(
-        "  → {:.2}× faster than the previous QR (same results within 1e-12)",
-        cof_old.median / cof.median
-    );
     let svd = measure(secs, 64, || {
         i = (i + 1) % jacobians.len();
         black_box(kernel_svd(black_box(&jacobians[i])));

@@ -1,6 +1,6 @@
 //! `prf firmware`: run tasks on the cell-controller firmware under QEMU (mps2-an500,
 //! Cortex-M7, `-icount shift=0`) with a blob flashed into its region, and check each against
-//! the host runtime: the timing and RAM budgets, and the setpoint stream within 1e-9 rad.
+//! the host runtime: the timing and RAM budgets, and the setpoint stream bit for bit.
 
 use crate::cli::args::{TaskArgs, WorldArgs};
 use crate::cli::progress::Bar;
@@ -93,7 +93,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         MAX_STATIC_RAM / 1024
     );
     println!(
-        "(instructions under qemu-system-arm -icount shift=0; |Δq|: firmware vs host setpoints, tolerance {STREAM_TOLERANCE:e} rad; limit: the firmware stream's peak ratio to the position, speed, acceleration and jerk limits, 1 ms finite differences; streams in {})",
+        "(instructions under qemu-system-arm -icount shift=0; |Δq|: firmware vs host setpoints, allowed {STREAM_TOLERANCE:e} rad (0: bit for bit); limit: the firmware stream's peak ratio to the position, speed, acceleration and jerk limits, 1 ms finite differences; streams in {})",
         a.dir.display()
     );
     if failed > 0 {
