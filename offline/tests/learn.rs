@@ -143,6 +143,15 @@ fn arm_instances(f: &Fixture, d: &Demonstration) -> Vec<(usize, Pose, Vec<[f64; 
     out
 }
 
+/// The learned field of location type `t`.
+fn workspace(f: &Fixture, t: usize) -> Field<'_> {
+    f.knowledge.location_types[t]
+        .field
+        .as_ref()
+        .unwrap()
+        .field()
+}
+
 /// Risk (Eq. 16) of a configuration path, evaluated at the samples and linearly in between
 /// (8 evaluations per sample interval).
 fn path_risk(model: &RobotModel, field: &Field, base: &Pose, path: &[[f64; 7]]) -> f64 {
@@ -169,11 +178,7 @@ fn every_demonstration_segment_has_risk_zero() {
     let f = fixture();
     for d in &f.dataset.demonstrations {
         for (t, base, path) in arm_instances(f, d) {
-            let field = f.knowledge.location_types[t]
-                .field
-                .as_ref()
-                .unwrap()
-                .field();
+            let field = workspace(f, t);
             let r = path_risk(&f.model, &field, &base, &path);
             assert_eq!(
                 r, 0.0,
@@ -221,11 +226,7 @@ fn a_trajectory_pushed_10_cm_out_has_the_exact_risk_within_one_voxel() {
         .iter()
         .position(|l| l.name == "Table")
         .unwrap();
-    let field = f.knowledge.location_types[t]
-        .field
-        .as_ref()
-        .unwrap()
-        .field();
+    let field = workspace(f, t);
     let sweep = sweep_of(f, t);
     let eps = f.knowledge.config.workspace.epsilon;
     let d = f
@@ -530,11 +531,7 @@ fn anchored_lookups_agree_with_full_lookups() {
     let (mut lookups, mut skipped) = (0usize, 0usize);
     for d in f.dataset.demonstrations.iter().step_by(4) {
         for (t, base, path) in arm_instances(f, d) {
-            let field = f.knowledge.location_types[t]
-                .field
-                .as_ref()
-                .unwrap()
-                .field();
+            let field = workspace(f, t);
             let push = Vector3::new(
                 rng.random_range(-0.15..0.15),
                 rng.random_range(-0.15..0.15),
