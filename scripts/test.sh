@@ -25,6 +25,7 @@ fi
 
 step "cargo fmt --check"
 cargo fmt --all -- --check
+cargo fmt --manifest-path fuzz/libfuzzer/Cargo.toml -- --check
 
 step "cargo clippy -D warnings"
 cargo clippy --workspace --all-targets --locked -q -- -D warnings
@@ -68,6 +69,9 @@ cargo run --locked -q -p prf-offline --bin prf -- plan "$smoke/cell.blob" --part
 step "CLI smoke run: prf envelope (the nominal part pose and 10 mm around it, one yaw)"
 cargo run --locked -q -p prf-offline --bin prf -- envelope "$smoke/cell.blob" --part Part1 --from CNC1 \
   --to Table1 --range-mm 10 --step-mm 10 --yaw-deg 0 --budget-steps 20000 -o "$smoke/envelope" | tail -n 1
+
+step "fuzzing, short: every target 10 s from the committed seeds (scripts/fuzz.sh all 10; installs cargo-fuzz)"
+scripts/fuzz.sh all 10
 
 step "cargo test (workspace)"
 log=$(mktemp)

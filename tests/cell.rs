@@ -67,11 +67,22 @@ fn prf() -> Command {
     Command::new(env!("CARGO_BIN_EXE_prf"))
 }
 
+/// `prf` pinned to CPU 0 (`taskset -c 0`).
+fn prf_on_cpu0() -> Command {
+    let mut c = Command::new("taskset");
+    c.args(["-c", "0", env!("CARGO_BIN_EXE_prf")]);
+    c
+}
+
 fn firmware(cell: &str, watchdog: u32) -> Proc {
+    firmware_from(prf(), cell, watchdog)
+}
+
+/// [`firmware`] started by `prf` (a `prf` command, possibly wrapped).
+fn firmware_from(mut prf: Command, cell: &str, watchdog: u32) -> Proc {
     let home = planar(&floor_task().home);
     Proc(
-        prf()
-            .args(["firmware-sim", "--cell", cell, "--exit-with-parent"])
+        prf.args(["firmware-sim", "--cell", cell, "--exit-with-parent"])
             .args(["--world", "example"])
             .arg(format!("--watchdog={watchdog}"))
             .arg(format!("--base={},{},{}", home[0], home[1], home[2]))
@@ -83,9 +94,13 @@ fn firmware(cell: &str, watchdog: u32) -> Proc {
 }
 
 fn run_cell(cell: &str, json: &Path, extra: &[&str]) -> Proc {
+    run_cell_from(prf(), cell, json, extra)
+}
+
+/// [`run_cell`] started by `prf` (a `prf` command, possibly wrapped).
+fn run_cell_from(mut prf: Command, cell: &str, json: &Path, extra: &[&str]) -> Proc {
     Proc(
-        prf()
-            .arg("run")
+        prf.arg("run")
             .arg(blob())
             .args([
                 "--part", TASK[0], "--from", TASK[1], "--to", TASK[2], "--cell", cell,
@@ -648,4 +663,219 @@ fn a_rogue_second_cell_is_refused_and_the_running_one_goes_on() {
         .find(|l| l.contains("publisher of"))
         .unwrap_or("");
     println!("rogue cell refused: {}", why.trim());
+}
+
+/// What the test's own controller makes of its joint states once the arm moves fast.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Hostile {
+    /// A3 = NaN.
+    Nan,
+    /// A2 0.2 rad off.
+    Jump,
+    /// Stamped 1 s in the past.
+    Stale,
+}
+
+/// A joint controller of the test's own, in a thread of this process, on the cell's real
+/// services: at 1 kHz it publishes the newest setpoint as the measured state (an exact
+/// follower, the platform at its goal, the gripper where commanded) until the first arm
+/// setpoint faster than 0.3 rad/s; from then until the cell faults its states are `hostile`.
+/// Returns every setpoint received and when the first hostile state was published
+/// (CLOCK_MONOTONIC ns).
+fn hostile_controller(
+    cell: &str,
+    hostile: Hostile,
+    stop: Arc<AtomicBool>,
+) -> JoinHandle<(Vec<SetpointMsg>, Option<u64>)> {
+    use prf_ipc::link::ControllerPorts;
+    let cell = cell.to_string();
+    std::thread::spawn(move || {
+        let node = link::node(&link::controller_node_name(&cell)).expect("controller node");
+        let ports = ControllerPorts::open(&node, &cell).expect("controller ports");
+        let mut js = JointStateMsg {
+            q: RobotModel::kmr_iiwa14().home,
+            base: planar(&floor_task().home),
+            drive_clearance: f64::NAN,
+            ..JointStateMsg::default()
+        };
+        let (mut seen, mut injected) = (Vec::new(), None);
+        let period = Duration::from_millis(1);
+        let mut next = Instant::now();
+        while !stop.load(Ordering::Relaxed) {
+            let _ = ports.ready.try_wait(|_| {});
+            while let Some(sample) = ports.setpoint.receive().expect("receive a setpoint") {
+                let sp: SetpointMsg = *sample;
+                (js.q, js.qd, js.base) = (sp.q, sp.qd, sp.base_goal);
+                js.gripper = if sp.flags & flags::GRIPPER_CLOSE != 0 {
+                    1.0
+                } else {
+                    0.0
+                };
+                (js.setpoint_seq, js.status) = (sp.seq, status::ACTIVE);
+                seen.push(sp);
+            }
+            let mut out = JointStateMsg {
+                seq: js.seq + 1,
+                t_ns: now_ns(),
+                ..js
+            };
+            js.seq = out.seq;
+            let fast = seen.last().is_some_and(|s: &SetpointMsg| {
+                s.mode == mode::ARM && s.qd.iter().any(|v| v.abs() > 0.3)
+            });
+            // Hostile from the first fast setpoint until the cell faults (the cell reads only
+            // the newest state per tick, so one state alone may be passed over).
+            let faulted = seen.last().is_some_and(|s| s.flags & flags::FAULT != 0);
+            if (fast || injected.is_some()) && !faulted {
+                match hostile {
+                    Hostile::Nan => out.q[2] = f64::NAN,
+                    Hostile::Jump => out.q[1] += 0.2,
+                    Hostile::Stale => out.t_ns -= 1_000_000_000,
+                }
+            }
+            if fast && injected.is_none() {
+                injected = Some(now_ns());
+            }
+            ports.publish(out).expect("publish a joint state");
+            next += period;
+            match next.checked_duration_since(Instant::now()) {
+                Some(wait) => std::thread::sleep(wait),
+                None => next = Instant::now(),
+            }
+        }
+        (seen, injected)
+    })
+}
+
+/// Issue 18: hostile joint states from a controller that is otherwise alive and exact. A NaN
+/// in the measured arm, or a jump of 0.2 rad, faults the executor on the tick it arrives; the
+/// cell brakes through its output stage (the whole stream stays within the limits, by
+/// independent third differences) and ends at rest with LAST, nothing lost. States stamped 1 s
+/// in the past are stale: the cell counts and drops them, and faults after its silence limit
+/// (100 ms) as if the controller were silent.
+#[test]
+fn hostile_joint_states_fault_the_cell_which_brakes_within_limits() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let model = RobotModel::kmr_iiwa14();
+    println!("hostile state  detected after  fault");
+    for hostile in [Hostile::Nan, Hostile::Jump, Hostile::Stale] {
+        let cell = cell_name(&format!("hostile-{hostile:?}").to_lowercase());
+        let stop = Arc::new(AtomicBool::new(false));
+        let controller = hostile_controller(&cell, hostile, stop.clone());
+        let json = dir().join(format!("{cell}.json"));
+        let mut run = run_cell(&cell, &json, &[]);
+        let status = run.wait_for(Duration::from_secs(120));
+        std::thread::sleep(Duration::from_millis(50));
+        stop.store(true, Ordering::Relaxed);
+        let (sp, injected) = controller.join().expect("controller thread");
+        let injected = injected.expect("the arm moved fast: a hostile state was sent");
+        assert!(
+            !status.success(),
+            "{hostile:?}: the cell must exit with a fault"
+        );
+        let r = report(&json);
+        let fault = r["fault"].as_str().expect("a fault").to_string();
+        let detected = r["fault_t_ns"].as_u64().expect("fault time");
+        let ms = detected.saturating_sub(injected) as f64 * 1e-6;
+        println!("{hostile:<14?} {ms:>10.2} ms  {fault}");
+        for (k, s) in sp.iter().enumerate() {
+            assert_eq!(
+                s.seq,
+                k as u64 + 1,
+                "{hostile:?}: setpoints numbered 1, 2, 3, …"
+            );
+        }
+        let stream: Vec<[f64; NA]> = sp.iter().map(|s| s.q).collect();
+        let ratios = stream_ratios(&stream, &model);
+        match hostile {
+            Hostile::Nan | Hostile::Jump => {
+                let what = if hostile == Hostile::Nan {
+                    "not finite"
+                } else {
+                    "from its setpoint"
+                };
+                assert!(fault.contains(what), "{hostile:?}: {fault}");
+                assert!(
+                    ms <= 5.0,
+                    "{hostile:?}: detected {ms} ms after the state was sent"
+                );
+                let last = sp.last().expect("setpoints");
+                assert!(last.flags & flags::LAST != 0 && last.flags & flags::FAULT != 0);
+                assert!(last.qd.iter().all(|v| *v == 0.0), "ends at rest: {last:?}");
+                assert!(
+                    ratios.iter().all(|x| *x <= 1.0 + 1e-6),
+                    "{hostile:?}: emitted stream at {ratios:?} of the limits"
+                );
+            }
+            Hostile::Stale => {
+                assert!(
+                    fault.contains("silent") && fault.contains("stale"),
+                    "{fault}"
+                );
+                assert!(r["stale_states"].as_u64().unwrap() >= 50, "{r}");
+                assert!((90.0..=250.0).contains(&ms), "stale detected after {ms} ms");
+                // Up to the fault the stream is the certified one (no controller is left to
+                // brake with: the real one's watchdog would).
+                assert!(ratios[..2].iter().all(|x| *x <= 1.0), "{ratios:?}");
+            }
+        }
+    }
+}
+
+/// Issue 18: the cell, firmware-sim and a CPU hog (a busy shell loop) all pinned to CPU 0 for
+/// 10 s of the task (the drive to CNC1 and the reach). The scheduler shares the core: the
+/// loop wakes late and misses deadlines (the figures are printed), but nothing is lost,
+/// repeated or refused, the stream stays within every limit, and the arm stops at rest.
+#[test]
+fn both_processes_on_one_core_beside_a_cpu_hog_keep_the_stream_within_limits() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let model = RobotModel::kmr_iiwa14();
+    let cell = cell_name("cpu-hog");
+    let _hog = Proc(
+        Command::new("taskset")
+            .args(["-c", "0", "sh", "-c", "while :; do :; done"])
+            .spawn()
+            .expect("start the CPU hog"),
+    );
+    let _fw = firmware_from(prf_on_cpu0(), &cell, 100);
+    let watch = Watch::start(&cell);
+    let json = dir().join(format!("{cell}.json"));
+    let mut run = run_cell_from(prf_on_cpu0(), &cell, &json, &["--stop-after", "10"]);
+    let status = run.wait_for(Duration::from_secs(120));
+    let (sp, _) = watch.finish();
+    let r = report(&json);
+    let ticks = r_u64(&r, "ticks");
+    let misses = r_u64(&r, "deadline_misses");
+    let late = &r["wake_late_us"];
+    println!(
+        "one core with a CPU hog: {ticks} ticks, {misses} deadline misses ({:.2} %), wake-up late p50 {} µs p99 {} µs max {} µs, tracking {:.3} mrad, lost {} repeated {} refused {}",
+        misses as f64 * 100.0 / ticks.max(1) as f64,
+        late[0],
+        late[1],
+        late[3],
+        r["max_tracking_error"].as_f64().unwrap_or(f64::NAN) * 1e3,
+        r["lost"],
+        r["repeated"],
+        r["rejected"]
+    );
+    assert!(status.success(), "the run faulted: {r}");
+    assert_eq!(r["stopped"], true, "{r}");
+    assert_eq!(
+        (
+            r_u64(&r, "lost"),
+            r_u64(&r, "repeated"),
+            r_u64(&r, "rejected")
+        ),
+        (0, 0, 0)
+    );
+    for (k, s) in sp.iter().enumerate() {
+        assert_eq!(s.seq, k as u64 + 1, "setpoints numbered 1, 2, 3, …");
+    }
+    let stream: Vec<[f64; NA]> = sp.iter().map(|s| s.q).collect();
+    // The stop is Ruckig's brake at the limits: its third differences carry rounding of about
+    // ulp(q)/Δt³, a few 1e-9 of the jerk limit.
+    let ratios = stream_ratios(&stream, &model);
+    assert!(ratios.iter().all(|x| *x <= 1.0 + 1e-6), "{ratios:?}");
+    let last = sp.last().expect("setpoints");
+    assert!(last.flags & flags::LAST != 0 && last.qd.iter().all(|v| *v == 0.0));
 }

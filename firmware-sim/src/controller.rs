@@ -46,6 +46,26 @@ pub enum ControllerError {
 /// The result of a controller operation.
 pub type Result<T> = std::result::Result<T, ControllerError>;
 
+/// Where the controller's measured states go: the shared-memory port, or the observer of a
+/// [`replay`].
+pub trait StateSink {
+    fn publish(&self, msg: JointStateMsg) -> Result<()>;
+}
+
+impl StateSink for ControllerPorts {
+    fn publish(&self, msg: JointStateMsg) -> Result<()> {
+        Ok(ControllerPorts::publish(self, msg)?)
+    }
+}
+
+/// A replay's observer: a closure that sees every published state.
+impl<F: Fn(&JointStateMsg)> StateSink for F {
+    fn publish(&self, msg: JointStateMsg) -> Result<()> {
+        self(&msg);
+        Ok(())
+    }
+}
+
 /// Everything the controller is started with.
 #[derive(Clone, Debug)]
 pub struct Config {
@@ -250,8 +270,8 @@ struct Controller<'c> {
     cfg: &'c Config,
     model: RobotModel,
     limits: MotionLimits,
-    ports: &'c ControllerPorts,
-    log: std::io::BufWriter<std::fs::File>,
+    sink: &'c dyn StateSink,
+    log: Box<dyn Write>,
     start: Instant,
     plant: Plant,
     guard: Guard,
@@ -273,15 +293,10 @@ struct Controller<'c> {
 }
 
 impl<'c> Controller<'c> {
-    fn new(cfg: &'c Config, ports: &'c ControllerPorts) -> Result<Self> {
+    /// A controller at rest that publishes to `sink` and logs to `log`.
+    fn new(cfg: &'c Config, sink: &'c dyn StateSink, mut log: Box<dyn Write>) -> Result<Self> {
         let model = RobotModel::kmr_iiwa14();
         let limits = MotionLimits::kmr_iiwa(&model);
-        let log_file =
-            std::fs::File::create(&cfg.log).map_err(|source| ControllerError::CreateLog {
-                path: cfg.log.display().to_string(),
-                source,
-            })?;
-        let mut log = std::io::BufWriter::with_capacity(1 << 16, log_file);
         writeln!(
             log,
             "# prf firmware-sim, cell {:?}, servo {:.1} Hz ζ {:.2}, watchdog {} cycles, gripper {:.2} s",
@@ -298,10 +313,10 @@ impl<'c> Controller<'c> {
             cfg,
             model,
             limits,
-            ports,
+            sink,
             log,
             start: Instant::now(),
-            guard: Guard::default(),
+            guard: Guard::new(cfg.watchdog_cycles),
             summary: Summary::default(),
             active: false,
             halted: false,
@@ -371,7 +386,7 @@ impl<'c> Controller<'c> {
         self.summary.max_tracking_error = self.summary.max_tracking_error.max(e);
         let clearance = self.plant.drive_clearance();
         self.watch_drive(clearance)?;
-        self.ports.publish(JointStateMsg {
+        self.sink.publish(JointStateMsg {
             seq: self.js_seq,
             t_ns: now_ns(),
             setpoint_seq: sp_seq,
@@ -395,9 +410,9 @@ impl<'c> Controller<'c> {
         Ok(())
     }
 
-    /// One cycle driven by setpoint `sp`: session bookkeeping, admission, one plant step,
-    /// publish.
-    fn on_setpoint(&mut self, sp: SetpointMsg) -> Result<Flow> {
+    /// One cycle driven by setpoint `sp`, received at `now`: session bookkeeping, admission,
+    /// one plant step, publish.
+    fn on_setpoint(&mut self, sp: SetpointMsg, now: Instant) -> Result<Flow> {
         let latency = now_ns().saturating_sub(sp.t_ns);
         if sp.flags & flags::SHUTDOWN != 0 {
             self.event(format_args!("shutdown requested"))?;
@@ -430,7 +445,7 @@ impl<'c> Controller<'c> {
             self.window_error = self.window_error.max(self.plant.tracking_error());
             self.publish(sp.seq, latency)?;
         }
-        self.last_setpoint = Instant::now();
+        self.last_setpoint = now;
         if sp.flags & flags::LAST != 0 {
             self.end_session(sp.seq)?;
         }
@@ -559,7 +574,13 @@ pub fn run(cfg: &Config) -> Result<Summary> {
     let _guard = waitset
         .attach_notification(&ports.ready)
         .map_err(|e| ControllerError::WaitSet(format!("attach: {e:?}")))?;
-    let mut c = Controller::new(cfg, &ports)?;
+    let log_file =
+        std::fs::File::create(&cfg.log).map_err(|source| ControllerError::CreateLog {
+            path: cfg.log.display().to_string(),
+            source,
+        })?;
+    let log = std::io::BufWriter::with_capacity(1 << 16, log_file);
+    let mut c = Controller::new(cfg, &ports, Box::new(log))?;
     let parent = rustix::process::getppid();
     let period = Duration::from_millis(1);
     let mut next = Instant::now() + period;
@@ -575,20 +596,19 @@ pub fn run(cfg: &Config) -> Result<Summary> {
             c.event(format_args!("exit signal"))?;
             break;
         }
-        c.ports
+        ports
             .ready
             .try_wait(|_| {})
             .map_err(|e| IpcError::new("listener of the setpoint event", e))?;
         let (mut stepped, mut caught_up) = (false, false);
-        while let Some(sample) = c
-            .ports
+        while let Some(sample) = ports
             .setpoint
             .receive()
             .map_err(|e| IpcError::new("receive a setpoint", e))?
         {
             let sp = *sample;
             drop(sample);
-            match c.on_setpoint(sp)? {
+            match c.on_setpoint(sp, Instant::now())? {
                 Flow::Exit => break 'cycle,
                 Flow::Stepped => stepped = true,
                 Flow::CaughtUp => caught_up = true,
@@ -619,6 +639,42 @@ pub fn run(cfg: &Config) -> Result<Summary> {
         {
             c.event(format_args!("parent process gone; exiting"))?;
             break;
+        }
+    }
+    c.finish()
+}
+
+/// One input of a [`replay`]: a setpoint as it arrived, or a period that passed without one.
+#[derive(Clone, Copy, Debug)]
+pub enum Input {
+    Setpoint(SetpointMsg),
+    Silence,
+}
+
+/// The controller's cycles on `inputs`, without shared memory or a wall clock (for fuzzing
+/// and tests): a setpoint arrives on time, and a silent input is one period later than the
+/// input before it. Every published state goes to `sink`; the log is discarded. Ends at the
+/// last input or at a SHUTDOWN setpoint.
+pub fn replay(
+    cfg: &Config,
+    inputs: impl IntoIterator<Item = Input>,
+    sink: &dyn StateSink,
+) -> Result<Summary> {
+    let mut c = Controller::new(cfg, sink, Box::new(std::io::sink()))?;
+    let period = Duration::from_millis(1);
+    let mut now = c.start;
+    for input in inputs {
+        match input {
+            Input::Setpoint(sp) => {
+                if let Flow::Exit = c.on_setpoint(sp, now)? {
+                    break;
+                }
+                now += period;
+            }
+            Input::Silence => {
+                c.on_silence(now)?;
+                now += period;
+            }
         }
     }
     c.finish()

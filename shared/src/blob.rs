@@ -612,7 +612,7 @@ impl<'a> Blob<'a> {
         p.robot.to_model()?;
         for i in 0..p.classes.len() {
             let c = self.class(i)?;
-            if crate::motion::class(c.name).is_none() {
+            if crate::motion::class(c.name).is_none() || !c.action.is_well_formed() {
                 return Err(BlobError::Reference {
                     section: Section::Classes,
                     index: i,

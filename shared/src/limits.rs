@@ -100,6 +100,8 @@ pub struct ArmMeter {
     q: [f64; NA],
     v: [f64; NA],
     a: [f64; NA],
+    /// The last third difference.
+    jerk: [f64; NA],
     ratios: LimitRatios,
 }
 
@@ -117,6 +119,7 @@ impl ArmMeter {
             q: *q0,
             v: [0.0; NA],
             a: [0.0; NA],
+            jerk: [0.0; NA],
             ratios: LimitRatios::default(),
         };
         m.ratios.position = m.rate(q0).position;
@@ -164,7 +167,9 @@ impl ArmMeter {
         let h = 1.0 / self.dt;
         for j in 0..NA {
             let v = (q[j] - self.q[j]) * h;
-            self.a[j] = (v - self.v[j]) * h;
+            let a = (v - self.v[j]) * h;
+            self.jerk[j] = (a - self.a[j]) * h;
+            self.a[j] = a;
             self.v[j] = v;
         }
         self.q = *q;
@@ -178,6 +183,21 @@ impl ArmMeter {
     /// Finite-difference velocity and acceleration at the last sample.
     pub fn state(&self) -> (&[f64; NA], &[f64; NA], &[f64; NA]) {
         (&self.q, &self.v, &self.a)
+    }
+
+    /// The state at the last sample of the cubic through the last four samples (its constant
+    /// jerk is the last third difference): (q, q̇ + q̈Δt/2 + q⃛Δt²/3, q̈ + q⃛Δt) in the
+    /// backward differences above. A trajectory that continues from it with |q⃛| ≤ the jerk
+    /// limit is C² across the seam, so every third difference that straddles the seam — a
+    /// B-spline-weighted mean of q⃛ — stays within the jerk limit too (the backward-difference
+    /// state itself would add −q̈/(2Δt) to the first one).
+    pub fn continuous_state(&self) -> ([f64; NA], [f64; NA], [f64; NA]) {
+        let dt = self.dt;
+        let v = core::array::from_fn(|j| {
+            self.v[j] + self.a[j] * dt / 2.0 + self.jerk[j] * dt * dt / 3.0
+        });
+        let a = core::array::from_fn(|j| self.a[j] + self.jerk[j] * dt);
+        (self.q, v, a)
     }
 
     /// The ratios that stopping after the last sample would add (the arm then holds that

@@ -266,44 +266,12 @@ impl Dataset {
     /// Reads and validates the dataset in `dir` against the robot's joint limits.
     pub fn read(dir: &Path, model: &RobotModel) -> Result<Dataset, DatasetError> {
         let mpath = dir.join(MANIFEST);
-        let mtext = read_text(&mpath)?;
-        let manifest: Manifest = parse_json(&mpath, &mtext)?;
-        if manifest.format != FORMAT || manifest.version != VERSION {
-            return Err(err(
-                &mpath,
-                line_of(&mtext, "\"format\""),
-                ErrorKind::BadFormat(format!(
-                    "format {:?} version {}, this build reads {FORMAT:?} version {VERSION}",
-                    manifest.format, manifest.version
-                )),
-            ));
-        }
-        if let Some(r_d) = manifest.clearance_demo_m
-            && !(r_d > 0.0 && r_d.is_finite())
-        {
-            return Err(err(
-                &mpath,
-                line_of(&mtext, "\"clearance_demo_m\""),
-                ErrorKind::BadClearance(r_d),
-            ));
-        }
-        let ids = manifest
-            .parts
-            .iter()
-            .map(|p| &p.id)
-            .chain(manifest.locations.iter().map(|l| &l.id))
-            .chain(manifest.demonstrations.iter().map(|d| &d.id));
-        let mut seen = std::collections::HashSet::new();
-        for id in ids {
-            if !seen.insert(id) {
-                let line = line_of(&mtext, &format!("\"{id}\""));
-                return Err(err(&mpath, line, ErrorKind::Duplicate(id.clone())));
-            }
-        }
+        let manifest = parse_manifest(&mpath, &read_text(&mpath)?)?;
         let mut demonstrations = Vec::with_capacity(manifest.demonstrations.len());
         for entry in &manifest.demonstrations {
-            let task = read_task(&dir.join(&entry.task), &manifest)?;
-            let samples = read_trajectory(&dir.join(&entry.trajectory), model)?;
+            let (tpath, cpath) = (dir.join(&entry.task), dir.join(&entry.trajectory));
+            let task = parse_task(&tpath, &read_text(&tpath)?, &manifest)?;
+            let samples = parse_trajectory(&cpath, &read_text(&cpath)?, model)?;
             demonstrations.push(Demonstration {
                 id: entry.id.clone(),
                 task,
@@ -391,11 +359,54 @@ fn foreign_entry(dir: &Path) -> std::io::Result<Option<String>> {
     Ok(None)
 }
 
-fn read_task(path: &Path, manifest: &Manifest) -> Result<TaskRecord, DatasetError> {
-    let text = read_text(path)?;
-    let task: TaskRecord = parse_json(path, &text)?;
+/// The manifest in `text` (read from `path`), checked: format and version, r_d, unique ids.
+pub fn parse_manifest(path: &Path, text: &str) -> Result<Manifest, DatasetError> {
+    let manifest: Manifest = parse_json(path, text)?;
+    if manifest.format != FORMAT || manifest.version != VERSION {
+        return Err(err(
+            path,
+            line_of(text, "\"format\""),
+            ErrorKind::BadFormat(format!(
+                "format {:?} version {}, this build reads {FORMAT:?} version {VERSION}",
+                manifest.format, manifest.version
+            )),
+        ));
+    }
+    if let Some(r_d) = manifest.clearance_demo_m
+        && !(r_d > 0.0 && r_d.is_finite())
+    {
+        return Err(err(
+            path,
+            line_of(text, "\"clearance_demo_m\""),
+            ErrorKind::BadClearance(r_d),
+        ));
+    }
+    let ids = manifest
+        .parts
+        .iter()
+        .map(|p| &p.id)
+        .chain(manifest.locations.iter().map(|l| &l.id))
+        .chain(manifest.demonstrations.iter().map(|d| &d.id));
+    let mut seen = std::collections::HashSet::new();
+    for id in ids {
+        if !seen.insert(id) {
+            let line = line_of(text, &format!("\"{id}\""));
+            return Err(err(path, line, ErrorKind::Duplicate(id.clone())));
+        }
+    }
+    Ok(manifest)
+}
+
+/// The task record in `text` (read from `path`), checked against `manifest`: known ids of the
+/// right types, unit quaternions.
+pub fn parse_task(
+    path: &Path,
+    text: &str,
+    manifest: &Manifest,
+) -> Result<TaskRecord, DatasetError> {
+    let task: TaskRecord = parse_json(path, text)?;
     let check = |placed: &Placed, known: &[Instance], field: &str, part: bool| {
-        let line = line_of(&text, &format!("\"{}\"", placed.id));
+        let line = line_of(text, &format!("\"{}\"", placed.id));
         let Some(m) = known.iter().find(|i| i.id == placed.id) else {
             let kind = if part {
                 ErrorKind::UnknownPart(placed.id.clone())
@@ -416,7 +427,7 @@ fn read_task(path: &Path, manifest: &Manifest) -> Result<TaskRecord, DatasetErro
             ));
         }
         if !valid_pose(&placed.pose) {
-            let line = line_of(&text, &format!("\"{field}\""));
+            let line = line_of(text, &format!("\"{field}\""));
             return Err(err(
                 path,
                 line,
@@ -431,7 +442,7 @@ fn read_task(path: &Path, manifest: &Manifest) -> Result<TaskRecord, DatasetErro
     check(&task.from, &manifest.locations, "from", false)?;
     check(&task.to, &manifest.locations, "to", false)?;
     if !valid_pose(&task.goal) {
-        let line = line_of(&text, "\"goal\"");
+        let line = line_of(text, "\"goal\"");
         return Err(err(
             path,
             line,
@@ -443,8 +454,13 @@ fn read_task(path: &Path, manifest: &Manifest) -> Result<TaskRecord, DatasetErro
     Ok(task)
 }
 
-fn read_trajectory(path: &Path, model: &RobotModel) -> Result<Vec<Sample>, DatasetError> {
-    let text = read_text(path)?;
+/// The trajectory CSV in `text` (read from `path`), checked: header, numbers, time strictly
+/// increasing, joint limits, gripper in [0, 1], at least two samples.
+pub fn parse_trajectory(
+    path: &Path,
+    text: &str,
+    model: &RobotModel,
+) -> Result<Vec<Sample>, DatasetError> {
     let mut lines = text
         .lines()
         .enumerate()

@@ -48,8 +48,9 @@ pub struct CellConfig {
     /// Milliseconds without a new joint state after which the cell asks iceoryx2 whether the
     /// controller's process is alive, and stops with a fault if it is not.
     pub dead_after_ms: f64,
-    /// Milliseconds without a new joint state after which the cell stops with a fault even
-    /// though the controller's process is alive.
+    /// Milliseconds without a fresh joint state after which the cell stops with a fault even
+    /// though the controller's process is alive. A joint state stamped more than this before
+    /// (or after) it arrives is stale: it is counted and not used.
     pub silent_after_ms: f64,
     /// How long to wait for the controller's first joint state.
     pub connect_timeout: std::time::Duration,
@@ -100,6 +101,9 @@ pub struct CellReport {
     pub lost: u32,
     pub repeated: u32,
     pub rejected: u32,
+    /// Joint states that came stamped more than `silent_after_ms` away from the cell's clock,
+    /// and were not used.
+    pub stale_states: u64,
     /// Setpoints published after the end of their 1 ms period.
     pub deadline_misses: u64,
     /// Wake-up lateness after the scheduled tick, µs: p50, p99, p99.9, max.
@@ -180,6 +184,10 @@ pub struct Cell {
     limits: MotionLimits,
     last: JointStateMsg,
     liveness: Liveness,
+    /// Stale joint states received (see [`CellConfig::silent_after_ms`]), and the largest gap
+    /// between a stale one's stamp and its arrival, ms.
+    stale: u64,
+    stale_ms: f64,
 }
 
 /// Timing samples of one execution, allocated and touched before the loop (no page faults
@@ -252,6 +260,8 @@ impl Cell {
             limits: MotionLimits::kmr_iiwa(&rt.model),
             last,
             liveness,
+            stale: 0,
+            stale_ms: 0.0,
         })
     }
 
@@ -285,6 +295,7 @@ impl Cell {
             Some(r) => format!("{}; {}", self.cfg.wait, r.status),
             None => format!("{}; normal scheduling", self.cfg.wait),
         };
+        (self.stale, self.stale_ms) = (0, 0.0);
         let mut last_rx = std::time::Instant::now();
         let mut asked = None;
         let mut seen_sp = 0u64;
@@ -354,6 +365,7 @@ impl Cell {
         drop(parker);
         drop(realtime);
         report.ticks = k;
+        report.stale_states = self.stale;
         report.duration_s = k as f64 * 1e-3;
         (report.shaped, report.max_shaping) = stage.shaped();
         report.emitted = stage.ratios();
@@ -361,13 +373,20 @@ impl Cell {
         Ok(report)
     }
 
-    /// Takes the newest joint state, if one came since the last tick.
+    /// Takes the newest joint state, if a fresh one came since the last tick; a stale one is
+    /// counted and dropped.
     fn receive(&mut self) -> Result<bool, CellError> {
-        let newest = self.ports.newest()?;
-        if let Some(js) = newest {
-            self.last = js;
+        let Some(js) = self.ports.newest()? else {
+            return Ok(false);
+        };
+        let gap_ms = now_ns().abs_diff(js.t_ns) as f64 * 1e-6;
+        if gap_ms > self.cfg.silent_after_ms {
+            self.stale += 1;
+            self.stale_ms = self.stale_ms.max(gap_ms);
+            return Ok(false);
         }
-        Ok(newest.is_some())
+        self.last = js;
+        Ok(true)
     }
 
     /// Why the controller can no longer be commanded, after `silent` ms without a joint state:
@@ -382,8 +401,16 @@ impl Cell {
                 self.liveness.answer(q) == Some(false)
             });
         if dead {
+            let stale = if self.stale > 0 {
+                format!(
+                    "; {} stale ones came, stamped up to {:.1} ms from their arrival",
+                    self.stale, self.stale_ms
+                )
+            } else {
+                String::new()
+            };
             Some(format!(
-                "firmware-sim {}: no joint state for {silent:.1} ms (last seq {})",
+                "firmware-sim {}: no fresh joint state for {silent:.1} ms (last seq {}{stale})",
                 if silent >= self.cfg.silent_after_ms {
                     "silent"
                 } else {

@@ -92,11 +92,20 @@ impl OutputStage {
         self.meter.ratios()
     }
 
-    /// Emits Ruckig's next sample.
-    fn emit_ruckig(&mut self) -> Result<(), RuckigError> {
-        self.settled = self.ruckig.step()?;
+    /// Emits Ruckig's next sample. Where Ruckig reaches a target at rest (`to_rest`: a brake,
+    /// or landing on a reference at rest) the stage holds that sample exactly (Ruckig's own
+    /// samples at rest may still differ in the last bits). It is settled once the emitted
+    /// samples stand still — finite-difference velocity and acceleration zero — so the last
+    /// setpoint of a stop carries q̇ = 0.
+    fn emit_ruckig(&mut self, to_rest: bool) -> Result<(), RuckigError> {
+        let reached = self.ruckig.step()?;
         let q = *self.ruckig.position();
+        if reached && to_rest {
+            self.ruckig.set_state(&q, &[0.0; NA], &[0.0; NA]);
+        }
         self.meter.push(&q);
+        let (_, v, a) = self.meter.state();
+        self.settled = reached && v.iter().chain(a).all(|x| *x == 0.0);
         Ok(())
     }
 }
@@ -118,22 +127,24 @@ impl Plant for OutputStage {
     fn command(&mut self, sp: &Setpoint) -> Result<(), RuckigError> {
         if sp.mode == Mode::Fault || self.stopping {
             self.ruckig.brake();
-            return self.emit_ruckig();
+            return self.emit_ruckig(true);
         }
         if self.meter.try_push(&sp.arm) {
-            let (q, v, a) = self.meter.state();
-            self.ruckig.set_state(q, v, a);
+            let (q, v, a) = self.meter.continuous_state();
+            self.ruckig.set_state(&q, &v, &a);
+            let (_, v, a) = self.meter.state();
             self.settled = v.iter().chain(a).all(|x| *x == 0.0);
             return Ok(());
         }
-        if sp.arm_velocity.iter().all(|v| *v == 0.0) {
+        let to_rest = sp.arm_velocity.iter().all(|v| *v == 0.0);
+        if to_rest {
             // A reference at rest: land on it exactly (position interface), after which its
             // setpoints pass again.
             self.ruckig.go_to(&sp.arm);
         } else {
             self.ruckig.track(&sp.arm, &sp.arm_velocity, TRACKING_GAIN);
         }
-        self.emit_ruckig()?;
+        self.emit_ruckig(to_rest)?;
         let (q, _, _) = self.meter.state();
         let off = q
             .iter()
@@ -242,6 +253,30 @@ mod tests {
         r
     }
 
+    /// Commands the `stream` (ticks 1, 2, …) from rest at `q0`, then faults until the stage is
+    /// at rest; asserts nothing was shaped and returns every emitted sample.
+    fn stream_then_fault(stream: &[[f64; NA]], q0: [f64; NA], l: &MotionLimits) -> Vec<[f64; NA]> {
+        let mut stage = OutputStage::new(&q0, l, at_rest(&q0));
+        let mut out = std::vec![q0];
+        for (k, q) in stream.iter().enumerate() {
+            stage
+                .command(&setpoint(k as u32 + 1, *q, Mode::Arm))
+                .unwrap();
+            out.push(stage.output().0);
+        }
+        assert_eq!(stage.shaped().0, 0, "the stream passes");
+        let moving = stage.output().1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(moving > 0.1, "moving at {moving} rad/s");
+        let mut k = stream.len() as u32 + 1;
+        while !stage.settled() {
+            stage.command(&setpoint(k, q0, Mode::Fault)).unwrap();
+            out.push(stage.output().0);
+            k += 1;
+            assert!(k < 5000, "still moving");
+        }
+        out
+    }
+
     /// A smooth move within the limits (quintic smoothstep, 0.3 rad in 3 s) passes bit for
     /// bit, and nothing is shaped.
     #[test]
@@ -291,25 +326,40 @@ mod tests {
     #[test]
     fn a_fault_brakes_to_rest_within_the_limits() {
         let l = limits();
+        let stream: Vec<[f64; NA]> = (1..=1000)
+            .map(|k| {
+                let t = k as f64 * DT;
+                [0.2 * t * t * t / (1.0 + t * t); NA]
+            })
+            .collect();
+        let r = rate(&stream_then_fault(&stream, [0.0; NA], &l), &l);
+        assert!(r.max() <= 1.0 + 1e-9, "{r}");
+    }
+
+    /// A fault while the stream accelerates at 0.9 of the limit: the brake takes over from the
+    /// stream's continuous state, so the third differences across the seam keep the jerk limit
+    /// (from the backward-difference state the first one would be q̈/(2Δt) = 900 rad/s³,
+    /// 4.5× the limit).
+    #[test]
+    fn a_fault_at_full_acceleration_brakes_within_the_jerk_limit() {
+        let l = limits();
         let q0 = [0.0; NA];
-        let mut stage = OutputStage::new(&q0, &l, at_rest(&q0));
-        let mut out = std::vec![q0];
-        for k in 1..=1000u32 {
-            let t = k as f64 * DT;
-            let q = q0.map(|x| x + 0.2 * t * t * t / (1.0 + t * t));
-            stage.command(&setpoint(k, q, Mode::Arm)).unwrap();
-            out.push(stage.output().0);
-        }
-        assert_eq!(stage.shaped().0, 0);
-        let moving = stage.output().1[0];
-        assert!(moving > 0.1, "moving at {moving} rad/s");
-        let mut k = 1001;
-        while !stage.settled() {
-            stage.command(&setpoint(k, q0, Mode::Fault)).unwrap();
-            out.push(stage.output().0);
-            k += 1;
-            assert!(k < 5000, "still moving");
-        }
+        let (jerk, ramp) = (150.0, 0.012); // reaches 1.8 rad/s² in 12 ms
+        let q_of = |t: f64| {
+            if t <= ramp {
+                jerk * t * t * t / 6.0
+            } else {
+                let (a, v, p) = (
+                    jerk * ramp,
+                    jerk * ramp * ramp / 2.0,
+                    jerk * ramp.powi(3) / 6.0,
+                );
+                let s = t - ramp;
+                p + v * s + a * s * s / 2.0
+            }
+        };
+        let stream: Vec<[f64; NA]> = (1..=200).map(|k| [q_of(k as f64 * DT); NA]).collect();
+        let out = stream_then_fault(&stream, q0, &l);
         let r = rate(&out, &l);
         assert!(r.max() <= 1.0 + 1e-9, "{r}");
     }

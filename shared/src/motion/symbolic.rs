@@ -78,6 +78,16 @@ pub struct ActionTemplate {
 }
 
 impl ActionTemplate {
+    /// Every atom names only the template's own parameters (its arguments and a
+    /// `Value::Param`): what a blob's template must satisfy before it is grounded.
+    pub fn is_well_formed(&self) -> bool {
+        let n = self.params.len();
+        self.pre.iter().chain(&self.eff).all(|a| {
+            a.args.iter().all(|&i| (i as usize) < n)
+                && !matches!(a.value, Value::Param(i) if i as usize >= n)
+        })
+    }
+
     /// Builds a template; inputs beyond the fixed capacities are a programming error caught
     /// by the motion-class tests (the result would lack them).
     pub fn new(head: &str, params: &[Param], pre: &[Atom], eff: &[Atom]) -> Self {
@@ -89,5 +99,41 @@ impl ActionTemplate {
             pre: pre.iter().cloned().collect(),
             eff: eff.iter().cloned().collect(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The built-in classes' templates are well formed; an atom that names a parameter the
+    /// template lacks (as a corrupt blob can) is not.
+    #[test]
+    fn a_template_names_only_its_own_parameters() {
+        for c in crate::motion::CLASSES {
+            assert!(c.action().is_well_formed(), "{}", c.name());
+        }
+        let p = [Param::Part, Param::Location];
+        let ok = ActionTemplate::new(
+            "a",
+            &p,
+            &[Atom::new(StateVar::At, &[0, 1], Value::True)],
+            &[],
+        );
+        assert!(ok.is_well_formed());
+        let arg = ActionTemplate::new(
+            "a",
+            &p,
+            &[Atom::new(StateVar::At, &[0, 253], Value::True)],
+            &[],
+        );
+        assert!(!arg.is_well_formed());
+        let value = ActionTemplate::new(
+            "a",
+            &p,
+            &[],
+            &[Atom::new(StateVar::Holding, &[], Value::Param(2))],
+        );
+        assert!(!value.is_well_formed());
     }
 }
