@@ -65,6 +65,20 @@ fn robot_file_errors_name_the_file_and_line() {
     assert!(e.starts_with("r.urdf:"), "{e}");
     let no_joint = robot::EXAMPLE_URDF.replace("type=\"revolute\"", "type=\"fixed\"");
     assert!(robot::parse(&no_joint, "r.urdf", robot::EXAMPLE_SPHERES, "s.json").is_err());
+    // A joint whose child is its own parent link (found by fuzzing: the chain walk looped
+    // forever) is refused.
+    let looped = robot::EXAMPLE_URDF
+        .replacen(
+            "<child link=\"iiwa_link_3\"/>",
+            "<child link=\"iiwa_link_2\"/>",
+            1,
+        )
+        .replacen("<link name=\"iiwa_link_3\"/>", "", 1);
+    assert_ne!(looped, robot::EXAMPLE_URDF);
+    let e = robot::parse(&looped, "r.urdf", robot::EXAMPLE_SPHERES, "s.json")
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("r.urdf:") && e.contains("loop"), "{e}");
 }
 
 /// The sphere file states its fit margin; the model carries it (the blob and `prf inspect`

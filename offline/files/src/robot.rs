@@ -132,6 +132,12 @@ fn arm_chain<'a>(
         {
             invalid!("{urdf_name}: link '{link}' branches; the robot must be one chain");
         }
+        if chain.iter().any(|k| std::ptr::eq(*k, j)) {
+            invalid!(
+                "{urdf_name}: joint '{}' closes a loop back to link '{link}'; the robot must be one chain",
+                j.name
+            );
+        }
         chain.push(j);
         link = &j.child.link;
     }
