@@ -27,6 +27,8 @@ pub struct OutputStage {
     stopping: bool,
     /// The output is at rest (set by the last command).
     settled: bool,
+    /// Ruckig holds the emitted state (it emitted the last sample, or took the stream over).
+    ruckig_current: bool,
     /// Ticks whose setpoint Ruckig had to change, and the largest change, rad.
     shaped: u64,
     max_shaping: f64,
@@ -42,6 +44,7 @@ impl OutputStage {
             measured,
             stopping: false,
             settled: false,
+            ruckig_current: true,
             shaped: 0,
             max_shaping: 0.0,
         }
@@ -92,6 +95,18 @@ impl OutputStage {
         self.meter.ratios()
     }
 
+    /// Gives Ruckig the emitted stream's state if passed setpoints moved it on since Ruckig's
+    /// last sample: the state of the cubic through the last four samples
+    /// ([`ArmMeter::continuous_state`]), so the stream stays C² and within the jerk limit
+    /// across the seam. Passing setpoints costs nothing per tick.
+    fn take_over(&mut self) {
+        if !self.ruckig_current {
+            let (q, v, a) = self.meter.continuous_state();
+            self.ruckig.set_state(&q, &v, &a);
+            self.ruckig_current = true;
+        }
+    }
+
     /// Emits Ruckig's next sample. Where Ruckig reaches a target at rest (`to_rest`: a brake,
     /// or landing on a reference at rest) the stage holds that sample exactly (Ruckig's own
     /// samples at rest may still differ in the last bits). It is settled once the emitted
@@ -126,16 +141,17 @@ impl Plant for OutputStage {
     /// stop request.
     fn command(&mut self, sp: &Setpoint) -> Result<(), RuckigError> {
         if sp.mode == Mode::Fault || self.stopping {
+            self.take_over();
             self.ruckig.brake();
             return self.emit_ruckig(true);
         }
         if self.meter.try_push(&sp.arm) {
-            let (q, v, a) = self.meter.continuous_state();
-            self.ruckig.set_state(&q, &v, &a);
+            self.ruckig_current = false;
             let (_, v, a) = self.meter.state();
             self.settled = v.iter().chain(a).all(|x| *x == 0.0);
             return Ok(());
         }
+        self.take_over();
         let to_rest = sp.arm_velocity.iter().all(|v| *v == 0.0);
         if to_rest {
             // A reference at rest: land on it exactly (position interface), after which its
