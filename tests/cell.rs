@@ -560,29 +560,31 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
                     Stalled::Firmware => {
                         assert!(fault.contains("firmware-sim silent"), "{fault}");
                         // The silence runs from the last joint state published before the
-                        // stop (the signal lands after the test reads its clock).
+                        // fault (states published after SIGCONT, even before the test reads
+                        // its clock, come after it).
+                        let at = r["fault_t_ns"].as_u64().unwrap();
                         let last = s
                             .states
                             .iter()
-                            .rfind(|m| m.t_ns < s.continued)
-                            .expect("joint states before the stall")
+                            .rfind(|m| m.t_ns < at)
+                            .expect("joint states before the fault")
                             .t_ns;
-                        let at = r["fault_t_ns"].as_u64().unwrap();
                         (at - last) as f64 * 1e-6
                     }
                     Stalled::Cell => {
                         assert!(fault.contains("watchdog"), "{fault}");
-                        let last = s
-                            .setpoints
-                            .iter()
-                            .rfind(|m| m.t_ns < s.continued)
-                            .expect("setpoints before the stall")
-                            .t_ns;
+                        // The watchdog counts from the last setpoint before its trip.
                         let trip = s
                             .states
                             .iter()
-                            .find(|m| m.t_ns > last && m.status & status::WATCHDOG != 0)
+                            .find(|m| m.t_ns > s.stopped && m.status & status::WATCHDOG != 0)
                             .expect("watchdog trip");
+                        let last = s
+                            .setpoints
+                            .iter()
+                            .rfind(|m| m.t_ns < trip.t_ns)
+                            .expect("setpoints before the trip")
+                            .t_ns;
                         (trip.t_ns - last) as f64 * 1e-6
                     }
                 };
