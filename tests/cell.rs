@@ -425,9 +425,8 @@ struct Stall {
     report: serde_json::Value,
     setpoints: Vec<SetpointMsg>,
     states: Vec<JointStateMsg>,
-    /// When the process was stopped and continued, CLOCK_MONOTONIC ns.
+    /// When the process was stopped, CLOCK_MONOTONIC ns.
     stopped: u64,
-    continued: u64,
 }
 
 /// Runs the task with `--stop-after 16` s, stops `who` with SIGSTOP for `ms` once the arm moves
@@ -453,7 +452,6 @@ fn stall(who: Stalled, ms: u64) -> Stall {
     kill_process(pid, Signal::STOP).expect("SIGSTOP");
     std::thread::sleep(Duration::from_millis(ms));
     kill_process(pid, Signal::CONT).expect("SIGCONT");
-    let continued = now_ns();
     run.wait_for(Duration::from_secs(60));
     std::thread::sleep(Duration::from_millis(1500));
     let (setpoints, states) = watch.finish();
@@ -463,7 +461,6 @@ fn stall(who: Stalled, ms: u64) -> Stall {
         setpoints,
         states,
         stopped,
-        continued,
     }
 }
 
