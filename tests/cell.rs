@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{blob, dir, stream_ratios};
+use common::{blob, chord_distance, dir, stream_ratios};
 use prf_ipc::clock::now_ns;
 use prf_ipc::link::{self, Observer};
 use prf_ipc::messages::{JointStateMsg, SetpointMsg, flags, mode, status};
@@ -287,21 +287,7 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
     assert_ne!(sp.last().unwrap().flags & flags::LAST, 0);
     assert_ne!(sp[0].flags & flags::FIRST, 0);
 
-    // The part: held from the state where the gripper closed to where it starts opening.
-    let ft = floor_task();
-    let closed = js
-        .iter()
-        .position(|m| m.gripper >= 0.95)
-        .expect("gripper closed");
-    let opened = closed
-        + js[closed..]
-            .iter()
-            .position(|m| m.gripper < 0.95)
-            .expect("opened");
-    let grip = tcp(&model, &js[closed]).inverse() * ft.part_pose;
-    let placed = tcp(&model, &js[opened]) * grip;
-    let dp = (placed.translation.vector - ft.goal.translation.vector).norm();
-    let da = placed.rotation.angle_to(&ft.goal.rotation);
+    let (dp, da) = part_offset(&js, &model);
     println!(
         "part placed {:.2} mm, {:.2} mrad from its goal; max tracking error {:.3} mrad; {} setpoints",
         dp * 1e3,
@@ -314,6 +300,27 @@ fn one_task_end_to_end_places_the_part_at_its_goal() {
         dp <= 5e-3 && da <= 1e-2,
         "part {dp} m, {da} rad from its goal"
     );
+}
+
+/// The part, held from the state where the gripper first closed to where it starts opening:
+/// where it was put down against its goal, (m, rad).
+fn part_offset(js: &[JointStateMsg], model: &RobotModel) -> (f64, f64) {
+    let ft = floor_task();
+    let closed = js
+        .iter()
+        .position(|m| m.gripper >= 0.95)
+        .expect("gripper closed");
+    let opened = closed
+        + js[closed..]
+            .iter()
+            .position(|m| m.gripper < 0.95)
+            .expect("opened");
+    let grip = tcp(model, &js[closed]).inverse() * ft.part_pose;
+    let placed = tcp(model, &js[opened]) * grip;
+    (
+        (placed.translation.vector - ft.goal.translation.vector).norm(),
+        placed.rotation.angle_to(&ft.goal.rotation),
+    )
 }
 
 fn r_u64(r: &serde_json::Value, key: &str) -> u64 {
@@ -877,4 +884,123 @@ fn both_processes_on_one_core_beside_a_cpu_hog_keep_the_stream_within_limits() {
     assert!(ratios.iter().all(|x| *x <= 1.0 + 1e-6), "{ratios:?}");
     let last = sp.last().expect("setpoints");
     assert!(last.flags & flags::LAST != 0 && last.qd.iter().all(|v| *v == 0.0));
+}
+
+/// What a recovered task left behind: the part placed within the executor's platform tolerance
+/// of its goal (from the measured states of every session), the recovery's session complete
+/// with nothing lost, repeated, refused or reshaped, and its setpoints within the limits. The
+/// retraction's setpoints lie on the certified arm stream's polyline after the move onto it.
+fn assert_recovered(r: &serde_json::Value, sp: &[SetpointMsg], js: &[JointStateMsg], from: usize) {
+    assert_eq!(r["completed"], true, "{r}");
+    assert!(r["fault"].is_null(), "{r}");
+    assert_eq!(
+        (r_u64(r, "lost"), r_u64(r, "repeated"), r_u64(r, "rejected")),
+        (0, 0, 0),
+        "{r}"
+    );
+    assert_eq!(r_u64(r, "shaped"), 0, "{r}");
+    let model = RobotModel::kmr_iiwa14();
+    let session = &sp[from..];
+    assert_ne!(
+        session[0].flags & flags::FIRST,
+        0,
+        "the recovery is a new session"
+    );
+    let q: Vec<[f64; NA]> = session.iter().map(|s| s.q).collect();
+    let ratios = stream_ratios(&q, &model);
+    assert!(ratios.iter().all(|x| *x <= 1.0 + 1e-9), "{ratios:?}");
+    // Every moving setpoint of the recovery is on the certified stream of the whole task
+    // (within 1e-6 rad of a chord of it) except the move onto it.
+    let certified = certified_arm_stream(&floor_task());
+    let moving = moves(&q);
+    let off: Vec<f64> = moving
+        .iter()
+        .map(|x| {
+            certified
+                .windows(2)
+                .map(|w| chord_distance(x, &w[0], &w[1]))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    let first_on = off.iter().position(|d| *d <= 1e-9).expect("onto the path");
+    let worst = off[first_on..].iter().copied().fold(0.0, f64::max);
+    assert!(worst <= 1e-6, "{worst} rad off the certified path");
+    let (dp, da) = part_offset(js, &model);
+    assert!(
+        dp <= 5e-3 && da <= 1e-2,
+        "part {dp} m, {da} rad from its goal"
+    );
+    println!(
+        "recovered: {} setpoints, {} moving ones ({} onto the path), peak ratios {:.3?}, part placed {:.2} mm from its goal",
+        session.len(),
+        moving.len(),
+        first_on,
+        ratios,
+        dp * 1e3
+    );
+}
+
+/// Issue 18, recovery: the cell is killed (SIGKILL) mid-reach; firmware-sim's watchdog brakes
+/// the arm; a new `prf run --recover` of the same task finds the arm on the certified reach,
+/// retracts along it to q_a,H and completes the task with the part at its goal.
+#[test]
+fn a_cell_killed_mid_reach_recovers_along_the_certified_path_and_completes_the_task() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = cell_name("recover");
+    let _fw = firmware(&cell, 50);
+    let watch = Watch::start(&cell);
+    let json = dir().join(format!("{cell}.json"));
+    let mut run = run_cell(&cell, &json, &[]);
+    watch.until(Duration::from_secs(60), |sp, _| {
+        sp.last()
+            .is_some_and(|s| s.mode == mode::ARM && s.qd.iter().any(|v| v.abs() > 0.3))
+    });
+    run.0.kill().expect("kill the cell");
+    let _ = run.0.wait();
+    std::thread::sleep(Duration::from_millis(1000));
+    let killed_at = watch.seen.lock().unwrap().0.len();
+    let t0 = Instant::now();
+    let mut again = run_cell(&cell, &json, &["--recover"]);
+    assert!(
+        again.wait_for(Duration::from_secs(180)).success(),
+        "prf run --recover failed"
+    );
+    let took = t0.elapsed();
+    let (sp, js) = watch.finish();
+    println!("killed after {killed_at} setpoints; recovered and completed in {took:.1?}");
+    assert_recovered(&report(&json), &sp, &js, killed_at);
+}
+
+/// Issue 18, automatic recovery: firmware-sim stopped (SIGSTOP) for 300 ms mid-reach makes
+/// the cell fault (silent controller); with `--auto-recover` the same `prf run` waits for the
+/// arm to rest after the controller's watchdog brake, retracts along the certified path and
+/// completes the task.
+#[test]
+fn a_stalled_controller_is_recovered_automatically() {
+    use rustix::process::{Pid, Signal, kill_process};
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let cell = cell_name("auto-recover");
+    let fw = firmware(&cell, 50);
+    let watch = Watch::start(&cell);
+    let json = dir().join(format!("{cell}.json"));
+    let mut run = run_cell(&cell, &json, &["--auto-recover"]);
+    watch.until(Duration::from_secs(60), |sp, _| {
+        sp.last()
+            .is_some_and(|s| s.mode == mode::ARM && s.qd.iter().any(|v| v.abs() > 0.3))
+    });
+    let pid = Pid::from_child(&fw.0);
+    kill_process(pid, Signal::STOP).expect("SIGSTOP");
+    std::thread::sleep(Duration::from_millis(300));
+    kill_process(pid, Signal::CONT).expect("SIGCONT");
+    assert!(
+        run.wait_for(Duration::from_secs(180)).success(),
+        "prf run --auto-recover failed"
+    );
+    let (sp, js) = watch.finish();
+    let second = sp
+        .iter()
+        .rposition(|s| s.flags & flags::FIRST != 0)
+        .expect("sessions");
+    assert!(second > 0, "a second session");
+    assert_recovered(&report(&json), &sp, &js, second);
 }

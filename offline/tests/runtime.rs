@@ -5,7 +5,7 @@
 #[path = "../../tests/common/mod.rs"]
 mod common;
 
-use common::stream_ratios;
+use common::{chord_distance, stream_ratios};
 use nalgebra::Vector3;
 use prf_host::ideal::{Execution, execute};
 use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode};
@@ -536,6 +536,237 @@ fn the_executor_runs_exactly_the_planned_trajectory() {
         }
         assert_eq!(acc.risk(), risk);
     }
+}
+
+/// Largest joint distance of `q` from the polyline `path` (its segments near `hint`, which
+/// moves along as `q` does).
+fn polyline_distance(q: &[f64; 7], path: &[[f64; 7]], hint: &mut usize) -> f64 {
+    let chord = |i: usize| chord_distance(q, &path[i], &path[(i + 1).min(path.len() - 1)]);
+    let lo = hint.saturating_sub(3);
+    let hi = (*hint + 4).min(path.len());
+    let (i, d) = (lo..hi)
+        .map(|i| (i, chord(i)))
+        .fold((*hint, f64::INFINITY), |b, c| if c.1 < b.1 { c } else { b });
+    *hint = i;
+    d
+}
+
+/// Issue 18, recovery: a fault at a third and at two thirds of each arm motion of a task
+/// (reach and retract, on both sides), the arm then coasting 20 ticks on along its velocity and
+/// pushed 10–20 mrad aside (off the path, as a brake and a bump leave it). From that measured state alone the recovery finds the
+/// motion and step, moves onto the path, plays the certified configurations back to q_a,H
+/// (every setpoint within 1e-7 rad of the certified polyline, ending on q_a,H exactly), and
+/// resumes the task where the table of `prf_runtime::recover` says (or refuses a move back
+/// that leaves the learned workspace: at most 2 of the 8); the rest is the planned
+/// program setpoint for setpoint, and the whole stream stays within 0.3 of the speed and
+/// acceleration limits during the retraction and within the limits after it.
+#[test]
+fn a_fault_in_any_arm_motion_is_recovered_along_the_certified_path() {
+    use prf_host::ideal::{IdealCell, resume_on};
+    use prf_runtime::recover::{RecoverConfig, RecoverError, Situation, locate};
+    let world = World::example();
+    let rt = Runtime::load(full_blob()).expect("load");
+    let ft = FloorTask::new(&world, "Part1", "CNC1", "Table1").expect("task");
+    let task = ft.task();
+    let p = plan(&rt, &task).expect("plan");
+    let program = p.program.as_ref().expect("program");
+    let cfg = ExecutorConfig::default();
+    let rc = RecoverConfig::new(&cfg);
+    let run = execute(&rt, program, &ft.home, cfg, 400_000);
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    let segs = &program.segments;
+    let model = &rt.model;
+    // (segment the fault is in, its forward Arm segment, where the task resumes).
+    let arms: Vec<usize> = (0..segs.len())
+        .filter(|&i| matches!(segs[i], Segment::Arm { .. }))
+        .collect();
+    let cases = [
+        (arms[0], arms[0], arms[0]),
+        (arms[0] + 2, arms[0], arms[0] + 3),
+        (arms[1], arms[1], arms[1]),
+        (arms[1] + 2, arms[1], arms[1] + 3),
+    ];
+    // The moving arm setpoints of the planned program from segment `from` on.
+    let tail = |run: &Execution, from: usize| -> Vec<[f64; 7]> {
+        let mut out: Vec<[f64; 7]> = Vec::new();
+        for s in run.setpoints.iter().filter(|s| s.segment as usize >= from) {
+            if out.last() != Some(&s.arm) {
+                out.push(s.arm);
+            }
+        }
+        out
+    };
+    let mut refused = 0;
+    for (faulty, forward, resumes) in cases {
+        let ticks: Vec<usize> = (0..run.setpoints.len())
+            .filter(|&k| run.setpoints[k].segment as usize == faulty)
+            .collect();
+        let mut certified = vec![model.home];
+        certified.extend(arm_setpoints(&run, forward));
+        for part in [1, 2] {
+            let t = ticks[ticks.len() * part / 3];
+            let m = run.samples[t];
+            let v: [f64; 7] = std::array::from_fn(|j| m.arm[j] - run.samples[t - 1].arm[j]);
+            // Coasting, and pushed aside: 20 mrad on A7, −10 mrad on A4.
+            let aside = [0.0, 0.0, 0.0, -0.01, 0.0, 0.0, 0.02];
+            let stopped = std::array::from_fn(|j| m.arm[j] + 20.0 * v[j] + aside[j]);
+            let mut cell = IdealCell::new(stopped, &ft.home, 1e-3);
+            cell.measured.base = m.base;
+            cell.measured.gripper = m.gripper;
+            let start = cell.measured;
+            let label = format!("fault in segment {faulty} at tick {t}");
+            let r = match locate(&rt, &task, &p, &start, &rc) {
+                Ok(r) => r,
+                // Pushed aside out of the learned workspace: the move back is refused.
+                Err(e @ RecoverError::GapRisk { .. }) => {
+                    println!("{label}: {e}");
+                    refused += 1;
+                    continue;
+                }
+                Err(e) => panic!("{label}: {e}"),
+            };
+            let Situation::OnPath {
+                segment,
+                step,
+                gap,
+                gap_risk,
+                ..
+            } = r.situation
+            else {
+                panic!("{:?}", r.situation)
+            };
+            assert_eq!(segment as usize, forward, "{label}");
+            assert_eq!(r.resume_at, resumes, "{label}");
+            assert_eq!(gap_risk, 0.0, "{label}");
+            assert!(gap > 0.0 && gap <= rc.max_gap, "{label}: gap {gap}");
+            let rec = resume_on(&rt, &r.program, &ft.home, cfg, 400_000, &mut cell).unwrap();
+            assert!(rec.fault.is_none(), "{label}: {:?}", rec.fault);
+            assert_eq!(rec.setpoints.last().unwrap().mode, Mode::Done, "{label}");
+            // The retraction: onto q_step, then on the certified polyline back to q_a,H.
+            let retract: Vec<[f64; 7]> = rec
+                .setpoints
+                .iter()
+                .filter(|s| s.segment == 0 && s.mode == Mode::Arm)
+                .map(|s| s.arm)
+                .collect();
+            // The platform holds where it stopped while the arm retracts.
+            assert!(
+                rec.setpoints
+                    .iter()
+                    .filter(|s| s.segment == 0)
+                    .all(|s| s.base_goal == start.base),
+                "{label}: the platform moved"
+            );
+            let q_step = certified[step as usize];
+            let on = retract
+                .iter()
+                .position(|q| *q == q_step)
+                .expect("reaches q_step");
+            assert_eq!(
+                *retract.last().unwrap(),
+                model.home,
+                "{label}: ends at q_a,H"
+            );
+            let path = &certified[..=step as usize];
+            let mut hint = step as usize;
+            let off = retract[on..]
+                .iter()
+                .map(|q| polyline_distance(q, path, &mut hint))
+                .fold(0.0f64, f64::max);
+            assert!(off <= 1e-7, "{label}: {off} rad off the certified path");
+            assert_eq!(hint, 0, "{label}: the playback reaches q_0");
+            let mut stream = vec![start.arm];
+            stream.extend(retract.iter().copied());
+            let ratios = stream_ratios(&stream, model);
+            assert!(
+                ratios[1] <= 0.3 && ratios[2] <= 0.3 && ratios[3] <= 1.0,
+                "{label}: {ratios:?}"
+            );
+            // Then the task's program, as planned.
+            let rest: Vec<[f64; 7]> = {
+                let mut out: Vec<[f64; 7]> = vec![model.home];
+                for s in rec.setpoints.iter().filter(|s| s.segment >= 1) {
+                    if out.last() != Some(&s.arm) {
+                        out.push(s.arm);
+                    }
+                }
+                out
+            };
+            let mut planned = tail(&run, resumes);
+            if planned.first() != Some(&model.home) {
+                planned.insert(0, model.home);
+            }
+            assert_eq!(rest, planned, "{label}: the rest of the task as planned");
+            println!(
+                "{label}: back onto step {step} ({:.1} mrad), {} retraction ticks, peak speed {:.2}, acceleration {:.2}, jerk {:.2} of the limits; resumed at segment {resumes}",
+                gap * 1e3,
+                retract.len(),
+                ratios[1],
+                ratios[2],
+                ratios[3]
+            );
+        }
+    }
+
+    assert!(refused <= 2, "{refused} of 8 refused");
+
+    // What a recovery refuses.
+    let mid = run
+        .setpoints
+        .iter()
+        .position(|s| s.segment as usize == arms[0] + 1)
+        .unwrap();
+    let mut m = Measured {
+        arm: run.samples[mid].arm,
+        base: run.samples[mid].base,
+        gripper: 0.5,
+    };
+    assert!(matches!(
+        locate(&rt, &task, &p, &m, &rc),
+        Err(RecoverError::HalfGripped { .. })
+    ));
+    m.gripper = 0.0;
+    m.base[0] += 0.5;
+    let e = locate(&rt, &task, &p, &m, &rc).unwrap_err();
+    assert!(matches!(e, RecoverError::NoStance { .. }), "{e:?}");
+    println!("{e}");
+    m.base = run.samples[mid].base;
+    m.arm[1] += 0.3;
+    let e = locate(&rt, &task, &p, &m, &rc).unwrap_err();
+    assert!(matches!(e, RecoverError::OffPath { .. }), "{e:?}");
+    m.arm[0] = f64::NAN;
+    assert_eq!(
+        locate(&rt, &task, &p, &m, &rc),
+        Err(RecoverError::NonFinite)
+    );
+    // At q_a,H: nothing to retract; at the place stance with the gripper open the part was put
+    // down (resume at the drive home); holding it, at the drive to the place stance.
+    let at_home = |base: [f64; 3], gripper: f64| {
+        let m = Measured {
+            arm: model.home,
+            base,
+            gripper,
+        };
+        let r = locate(&rt, &task, &p, &m, &rc).expect("recovery");
+        assert_eq!(r.situation, Situation::AtHome);
+        r.resume_at
+    };
+    let place_base = run.samples[ticks_of(&run, arms[1])].base;
+    assert_eq!(at_home(planar_of(&ft.home), 0.0), 0);
+    assert_eq!(at_home(place_base, 0.0), arms[1] + 3);
+    assert_eq!(at_home(place_base, 1.0), arms[0] + 3);
+}
+
+/// The first tick of segment `seg`.
+fn ticks_of(run: &Execution, seg: usize) -> usize {
+    run.setpoints
+        .iter()
+        .position(|s| s.segment as usize == seg)
+        .expect("segment")
+}
+
+fn planar_of(p: &prf_shared::se3::Pose) -> [f64; 3] {
+    prf_runtime::executor::planar(p)
 }
 
 #[test]

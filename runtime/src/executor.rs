@@ -18,6 +18,7 @@
 
 use crate::load::{LoadError, Runtime};
 use crate::program::{Program, Segment};
+use crate::retract::{Connect, Playback};
 use crate::reverse::{Reversal, ReverseError};
 use embassy_time::{Duration, Instant};
 use prf_shared::rdmp::{Rdmp, RdmpError, RdmpRun};
@@ -41,6 +42,12 @@ pub struct ExecutorConfig {
     pub gripper_closed: f64,
     /// The gripper counts as open at or below this.
     pub gripper_open: f64,
+    /// A recovery's retraction ([`Segment::Retract`]) moves at this fraction of the arm's
+    /// speed, acceleration and jerk limits back onto the path, and then plays the path back at
+    /// this many samples per tick (0 < x ≤ 1).
+    pub retract_speed: f64,
+    /// Ticks over which the playback speeds up from rest.
+    pub retract_ramp: u32,
 }
 
 impl Default for ExecutorConfig {
@@ -53,6 +60,8 @@ impl Default for ExecutorConfig {
             tracking_tolerance: 0.1,
             gripper_closed: 0.95,
             gripper_open: 0.05,
+            retract_speed: 0.25,
+            retract_ramp: 1000,
         }
     }
 }
@@ -212,6 +221,18 @@ pub struct Executor<'r, 'a> {
     run: Option<RdmpRun>,
     last: Setpoint,
     fault: Option<Fault>,
+    /// Where a retraction is (None outside Retract segments).
+    retract: Option<Retraction>,
+}
+
+/// The phases of a [`Segment::Retract`] once prepared: re-integrate the forward motion up to
+/// step k without moving (recording it for the reversal), move onto q_k, play back to q_0.
+#[derive(Clone, Copy, Debug)]
+enum Retraction {
+    Replay,
+    /// The playback is filled ahead while the move runs.
+    Connect(Connect, Playback),
+    Playback(Playback),
 }
 
 impl<'r, 'a> Executor<'r, 'a> {
@@ -246,7 +267,27 @@ impl<'r, 'a> Executor<'r, 'a> {
             run: None,
             last,
             fault: None,
+            retract: None,
         }
+    }
+
+    /// An executor that starts from the arm, gripper and platform as measured in `start`
+    /// instead of q_a,H, open and at `home`: the executor of a recovery program ([`crate::recover`]), whose first
+    /// segment brings the arm back to q_a,H.
+    pub fn resuming(
+        rt: &'r Runtime<'a>,
+        program: Program,
+        home: &Pose,
+        start: &Measured,
+        cfg: ExecutorConfig,
+        reversal: &'r mut Reversal,
+    ) -> Self {
+        let mut ex = Self::new(rt, program, home, cfg, reversal);
+        ex.last.arm = start.arm;
+        ex.last.close_gripper = start.gripper >= cfg.gripper_closed;
+        // The platform holds where it is until a Base segment moves it.
+        ex.last.base_goal = start.base;
+        ex
     }
 
     /// The fault that stopped the executor, if any.
@@ -291,20 +332,30 @@ impl<'r, 'a> Executor<'r, 'a> {
     fn finish_segment(&mut self) {
         self.segment += 1;
         self.entered = None;
+        self.retract = None;
     }
 
     /// One unit of preparing arm segment `i` from the arm's current setpoint: decode its RDMP,
     /// or else start its run. True when the segment is ready to step (no work done then).
+    /// A retraction's run starts at q_a,H (where its forward motion started) and records
+    /// only its first `from` steps.
     fn prepare(&mut self, i: usize) -> Result<bool, Fault> {
         let segment = i as u8;
-        let Some(Segment::Arm {
-            skill,
-            goal,
-            steps,
-            scale,
-        }) = self.program.segments.get(i).copied()
-        else {
-            return Err(Fault::Program { segment });
+        let (skill, goal, steps, scale, recorded, q0) = match self.program.segments.get(i) {
+            Some(&Segment::Arm {
+                skill,
+                goal,
+                steps,
+                scale,
+            }) => (skill, goal, steps, scale, steps, self.last.arm),
+            Some(&Segment::Retract {
+                skill,
+                goal,
+                steps,
+                scale,
+                from,
+            }) if from <= steps => (skill, goal, steps, scale, from, self.rt.model.home),
+            _ => return Err(Fault::Program { segment }),
         };
         if self.prepared != Some(i) {
             self.prepared = None;
@@ -323,12 +374,12 @@ impl<'r, 'a> Executor<'r, 'a> {
         if self.run.is_some() {
             return Ok(true);
         }
-        let q0 = JointVector::from(self.last.arm);
+        let q0 = JointVector::from(q0);
         let mut run = RdmpRun::new(&self.rt.model, &self.rdmp, &q0, &goal, &self.rt.config.rdmp)
             .map_err(|error| Fault::Rdmp { segment, error })?;
         run.set_steps(steps as usize);
         self.reversal
-            .begin(steps as usize)
+            .begin(recorded as usize)
             .map_err(|error| Fault::Reverse { segment, error })?;
         self.run = Some(run);
         Ok(false)
@@ -347,7 +398,7 @@ impl<'r, 'a> Executor<'r, 'a> {
         };
         let i = self.segment + 1 + k;
         match later.get(k) {
-            Some(Segment::Arm { .. }) => {
+            Some(Segment::Arm { .. } | Segment::Retract { .. }) => {
                 self.prepare(i)?;
             }
             Some(Segment::Reverse { .. }) if self.prepared.is_some() => {
@@ -382,6 +433,7 @@ impl<'r, 'a> Executor<'r, 'a> {
             Segment::Grip { close } => self.grip(close, m, waited, sp),
             Segment::Arm { .. } => self.arm(sp),
             Segment::Reverse { .. } => self.reverse(sp),
+            Segment::Retract { from, .. } => self.retract(from, sp),
         }
     }
 
@@ -519,4 +571,93 @@ impl<'r, 'a> Executor<'r, 'a> {
         }
         Ok(())
     }
+
+    /// A recovery's retraction, one tick: prepare; re-integrate the forward motion to step
+    /// `from` without moving (one RDMP step per tick, recorded for the reversal); move onto
+    /// q_from ([`Connect`]); play q_from … q_0 back ([`Playback`], one reversal step per tick).
+    fn retract(&mut self, from: u32, sp: &mut Setpoint) -> Result<(), Fault> {
+        let index = sp.segment;
+        let segment = index;
+        sp.mode = Mode::Arm;
+        sp.arm_velocity = [0.0; NA];
+        // Prepared once: the replay hands its run to the reversal.
+        if self.retract.is_none() && !self.prepare(self.segment)? {
+            return Ok(());
+        }
+        let (model, cfg) = (&self.rt.model, &self.rt.config.rdmp);
+        let phase = self.retract.get_or_insert(Retraction::Replay);
+        let rdmp = &self.rdmp;
+        let reversal = &mut *self.reversal;
+        let reverse_fault = |error| Fault::Reverse { segment, error };
+        // Holding: the last setpoint (`sp` starts as it).
+        let q = match phase {
+            Retraction::Replay => {
+                let Some(run) = self.run.as_mut() else {
+                    return Err(Fault::Program { segment: index });
+                };
+                if run.progress().0 < from as usize {
+                    reversal.record(run);
+                    run.step(model, rdmp, cfg)
+                        .map_err(|error| Fault::Rdmp { segment, error })?;
+                    return Ok(());
+                }
+                let target = (*run.q()).into();
+                if let Some(run) = self.run.take() {
+                    reversal.adopt(run);
+                }
+                // A tick without a step: the reversal's first resume.
+                reversal.prepare(rdmp, cfg).map_err(reverse_fault)?;
+                let speed = self.cfg.retract_speed;
+                *phase = Retraction::Connect(
+                    Connect::new(self.last.arm, target, &self.rt.limits, speed, cfg.dt),
+                    Playback::new(target, from + 1, speed, self.cfg.retract_ramp),
+                );
+                return Ok(());
+            }
+            Retraction::Connect(c, p) => {
+                if p.wants() {
+                    p.feed(reversal_next(reversal, model, rdmp, cfg, segment)?);
+                }
+                let q = c.setpoint();
+                if c.finished() {
+                    *phase = Retraction::Playback(*p);
+                }
+                q
+            }
+            Retraction::Playback(p) => {
+                // At most one reversal step per tick; at the start the playback waits at rest
+                // until it holds three samples (if the move onto the path was shorter).
+                if p.wants() {
+                    p.feed(reversal_next(reversal, model, rdmp, cfg, segment)?);
+                }
+                if p.wants() {
+                    return Ok(());
+                }
+                let q = p.setpoint();
+                if p.finished() {
+                    self.finish_segment();
+                }
+                q
+            }
+        };
+        let previous = JointVector::from(self.last.arm);
+        sp.arm = q;
+        sp.arm_velocity = ((JointVector::from(q) - previous) / cfg.dt).into();
+        Ok(())
+    }
+}
+
+/// The reversal's next configuration for a retraction of segment `segment`.
+fn reversal_next(
+    reversal: &mut Reversal,
+    model: &prf_shared::robot::RobotModel,
+    rdmp: &Rdmp,
+    cfg: &prf_shared::rdmp::RdmpConfig,
+    segment: u8,
+) -> Result<[f64; NA], Fault> {
+    reversal
+        .next(model, rdmp, cfg)
+        .map_err(|error| Fault::Reverse { segment, error })?
+        .map(Into::into)
+        .ok_or(Fault::Program { segment })
 }

@@ -8,6 +8,8 @@
 //! - [`skill_plan`]: SkillPlan-PTT (Alg. 4), decomposed and pruned;
 //! - [`plan`](mod@plan): all of the above in order, giving a [`plan::Plan`] and its [`program::Program`];
 //! - [`executor`]: the 1 kHz state machine, with [`reverse`] for the reversed arm motions;
+//! - [`recover`]: after a fault, where the cell is in its program and the way back along the
+//!   certified path ([`retract`]);
 //! - [`stream`]: a setpoint as a fixed-size record (firmware → host comparison);
 //! - [`figures`]: the firmware's measured figures as one record for the host;
 //! - [`ideal`]: an ideal cell (exact arm, fixed-rate gripper and platform) to run programs
@@ -20,6 +22,8 @@ pub mod ideal;
 pub mod load;
 pub mod plan;
 pub mod program;
+pub mod recover;
+pub mod retract;
 pub mod reverse;
 pub mod skill_plan;
 pub mod stream;

@@ -42,6 +42,21 @@ pub enum Segment {
         /// Ticks of the motion.
         steps: u32,
     },
+    /// A recovery's retraction ([`crate::recover`]): the arm back onto step `from` of the
+    /// certified motion of an Arm segment (the fields are that segment's), then along it
+    /// backwards to q_a,H at a reduced speed ([`crate::retract`]).
+    Retract {
+        /// Blob index of the skill.
+        skill: u16,
+        /// TCP goal in the arm base frame.
+        goal: Pose,
+        /// Ticks of the whole forward motion.
+        steps: u32,
+        /// Its time scale.
+        scale: f64,
+        /// The step k the arm returns to, 0 ≤ k ≤ steps.
+        from: u32,
+    },
 }
 
 /// The parameters an action was realized with: its goal and, for RDMP generators, its skill
@@ -147,12 +162,24 @@ impl Program {
         Ok(Program { segments })
     }
 
+    /// The program a recovery runs: `first` (a retraction), then this program's segments from
+    /// index `at` on.
+    pub fn resumed(&self, first: Option<Segment>, at: usize) -> Result<Program, ProgramError> {
+        let mut segments = heapless::Vec::new();
+        let rest = self.segments.get(at..).unwrap_or(&[]);
+        for s in first.iter().chain(rest) {
+            segments.push(*s).map_err(|_| ProgramError::TooLong)?;
+        }
+        Ok(Program { segments })
+    }
+
     /// Ticks the arm segments take (the rest waits on the platform and the gripper).
     pub fn arm_ticks(&self) -> u64 {
         self.segments
             .iter()
             .map(|s| match s {
                 Segment::Arm { steps, .. } | Segment::Reverse { steps } => *steps as u64,
+                Segment::Retract { from, .. } => *from as u64,
                 _ => 0,
             })
             .sum()

@@ -74,3 +74,21 @@ pub fn stream_ratios(stream: &[[f64; 7]], model: &prf_shared::robot::RobotModel)
     }
     r
 }
+
+/// Largest per-joint distance of `q` from the segment a–b (joint space).
+#[allow(dead_code)] // not every test binary that shares this module needs it
+pub fn chord_distance(q: &[f64; 7], a: &[f64; 7], b: &[f64; 7]) -> f64 {
+    let (mut ab, mut aq) = (0.0, 0.0);
+    for j in 0..7 {
+        ab += (b[j] - a[j]) * (b[j] - a[j]);
+        aq += (q[j] - a[j]) * (b[j] - a[j]);
+    }
+    let t = if ab > 0.0 {
+        (aq / ab).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (0..7).fold(0.0f64, |m, j| {
+        m.max((q[j] - a[j] - t * (b[j] - a[j])).abs())
+    })
+}

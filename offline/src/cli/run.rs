@@ -4,9 +4,10 @@
 use crate::cli::args::{PacingArgs, TaskArgs, WorldArgs, read_blob, runtime};
 use crate::cli::child::{ChildGuard, spawn_firmware};
 use anyhow::{Context, bail};
-use prf_host::cell::{Cell, CellConfig};
+use prf_host::cell::{Cell, CellConfig, CellReport};
 use prf_runtime::executor::planar;
 use prf_runtime::plan::plan;
+use prf_runtime::recover::{RecoverConfig, Situation, locate};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -38,6 +39,16 @@ pub struct Args {
     /// Write the report as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Start from where an earlier run of this task stopped (a fault, a killed process): tell
+    /// from the measured state where the arm is on the task's certified motions, retract it
+    /// along the certified path to q_a,H at a reduced speed, and complete the task. With the
+    /// cell already at q_a,H this is an ordinary run.
+    #[arg(long)]
+    pub recover: bool,
+    /// After a fault during this run, recover as `--recover` does once the controller
+    /// answers again with the arm at rest, and complete the task (one attempt).
+    #[arg(long)]
+    pub auto_recover: bool,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
@@ -78,7 +89,18 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         program.segments.len(),
         a.cell
     );
-    let report = cell.execute(&rt, program, &ft.home)?;
+    let task = ft.task();
+    let mut report = if a.recover {
+        recover(&mut cell, &rt, &task, &p, &ft.home)?
+    } else {
+        cell.execute(&rt, program, &ft.home)?
+    };
+    if let (true, Some(f)) = (a.auto_recover, &report.fault) {
+        println!("{}", report.summary());
+        println!("fault: {f}; recovering once the arm is at rest");
+        cell.wait_at_rest(std::time::Duration::from_secs(10))?;
+        report = recover(&mut cell, &rt, &task, &p, &ft.home)?;
+    }
     if a.spawn_firmware {
         cell.shutdown()?;
     }
@@ -96,4 +118,42 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
         None => Ok(()),
     }
+}
+
+/// Locates the cell in `plan`'s program from its measured state, says what the recovery will
+/// do, and runs the recovery program (retraction, then the rest of the task).
+fn recover(
+    cell: &mut Cell,
+    rt: &prf_runtime::Runtime<'_>,
+    task: &prf_runtime::Task<'_>,
+    plan: &prf_runtime::Plan,
+    home: &prf_shared::se3::Pose,
+) -> anyhow::Result<CellReport> {
+    let m = cell.measured();
+    let r = locate(rt, task, plan, &m, &RecoverConfig::new(&cell.cfg.executor))
+        .map_err(|e| anyhow::anyhow!("cannot recover on cell {:?}: {e}", cell.cfg.cell))?;
+    let held = if r.holding {
+        "holding the part"
+    } else {
+        "gripper open"
+    };
+    match r.situation {
+        Situation::AtHome => println!(
+            "recover: the arm is at q_a,H ({held}): nothing to retract; resuming at segment {}",
+            r.resume_at
+        ),
+        Situation::OnPath {
+            segment,
+            step,
+            steps,
+            gap,
+            gap_risk,
+        } => println!(
+            "recover: the arm is {:.1} mrad from step {step} of {steps} of segment {segment}'s certified motion ({held}); moving onto it (risk {:.1} mm) and back along it to q_a,H, then resuming at segment {}",
+            gap * 1e3,
+            gap_risk * 1e3,
+            r.resume_at
+        ),
+    }
+    Ok(cell.resume(rt, &r.program, home)?)
 }

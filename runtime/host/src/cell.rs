@@ -35,6 +35,14 @@ pub enum CellError {
         "no joint state on prf/{cell}/joint-state within {seconds:.1} s: is `prf firmware-sim --cell {cell}` running?"
     )]
     NoController { cell: String, seconds: f64 },
+    #[error(
+        "the arm on prf/{cell}/joint-state did not come to rest within {seconds:.1} s (largest joint speed {speed:.4} rad/s)"
+    )]
+    NotAtRest {
+        cell: String,
+        seconds: f64,
+        speed: f64,
+    },
     #[error("starting the controller liveness thread failed")]
     Thread(#[source] std::io::Error),
 }
@@ -284,7 +292,51 @@ impl Cell {
         home: &Pose,
     ) -> Result<CellReport, CellError> {
         let mut reversal = Box::new(Reversal::new());
-        let mut ex = Executor::new(rt, program.clone(), home, self.cfg.executor, &mut reversal);
+        let ex = Executor::new(rt, program.clone(), home, self.cfg.executor, &mut reversal);
+        self.drive(ex)
+    }
+
+    /// The state the controller reported last.
+    pub fn measured(&self) -> Measured {
+        measured(&self.last)
+    }
+
+    /// Waits up to `timeout` for a fresh joint state with the arm at rest (after a fault the
+    /// controller may still be braking, or silent): the state a recovery starts from.
+    pub fn wait_at_rest(&mut self, timeout: std::time::Duration) -> Result<Measured, CellError> {
+        let t0 = std::time::Instant::now();
+        loop {
+            if self.receive()? && self.last.qd.iter().all(|v| v.abs() < 1e-4) {
+                return Ok(self.measured());
+            }
+            if t0.elapsed() > timeout {
+                return Err(CellError::NotAtRest {
+                    cell: self.cfg.cell.clone(),
+                    seconds: timeout.as_secs_f64(),
+                    speed: self.last.qd.iter().fold(0.0, |m, v| v.abs().max(m)),
+                });
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+    }
+
+    /// Runs a recovery program ([`prf_runtime::recover`]) from the state the controller
+    /// reported last, like [`Cell::execute`].
+    pub fn resume(
+        &mut self,
+        rt: &Runtime<'_>,
+        program: &Program,
+        home: &Pose,
+    ) -> Result<CellReport, CellError> {
+        let mut reversal = Box::new(Reversal::new());
+        let start = self.measured();
+        let cfg = self.cfg.executor;
+        let ex = Executor::resuming(rt, program.clone(), home, &start, cfg, &mut reversal);
+        self.drive(ex)
+    }
+
+    /// The real-time loop: per tick receive → `ex` step through the output stage → send.
+    fn drive(&mut self, mut ex: Executor<'_, '_>) -> Result<CellReport, CellError> {
         let mut stage = OutputStage::new(&self.last.q, &self.limits, measured(&self.last));
         let period = Duration::from_hz(1000);
         let mut timing = Timing::new();
@@ -299,6 +351,11 @@ impl Cell {
         let mut last_rx = std::time::Instant::now();
         let mut asked = None;
         let mut seen_sp = 0u64;
+        // A joint state of this session: stamped after it began and acknowledging one of its
+        // setpoints. Until one comes, the controller may still report the last session's stop
+        // (a recovery starts after a watchdog trip).
+        let begun = now_ns();
+        let mut acknowledged = false;
         let stop_ticks = self.cfg.stop_after.map(|d| d.as_millis() as u64);
         self.ports.connect()?;
         let mut ticker = Ticker::every(period);
@@ -317,7 +374,8 @@ impl Cell {
                 asked = None;
             }
             let js = self.last;
-            if js.setpoint_seq > seen_sp && js.setpoint_seq <= k {
+            acknowledged |= js.t_ns >= begun && (1..=k).contains(&js.setpoint_seq);
+            if acknowledged && js.setpoint_seq > seen_sp && js.setpoint_seq <= k {
                 seen_sp = js.setpoint_seq;
                 timing.latency(js.setpoint_latency_ns as f64 * 1e-3);
                 report.max_tracking_error = report.max_tracking_error.max(js.tracking_error);
@@ -330,9 +388,11 @@ impl Cell {
             }
             // Silence in wall time, not ticks: after a late wake-up the ticker catches up with
             // ticks in quick succession, faster than the controller answers.
-            if let Some(why) =
-                self.controller_stop(last_rx.elapsed().as_secs_f64() * 1e3, &mut asked)
-            {
+            if let Some(why) = self.controller_stop(
+                last_rx.elapsed().as_secs_f64() * 1e3,
+                &mut asked,
+                acknowledged,
+            ) {
                 // No controller to brake with: nothing more is sent.
                 report.fault = Some(why);
                 report.fault_t_ns = Some(now_ns());
@@ -393,7 +453,13 @@ impl Cell {
     /// it is dead or silent, or it stopped the arm itself (watchdog, refused setpoint).
     /// After `dead_after_ms` of silence the liveness helper is asked once (`asked` holds the
     /// question until a joint state comes); its answer "dead" stops the cell.
-    fn controller_stop(&self, silent: f64, asked: &mut Option<u64>) -> Option<String> {
+    /// Its stop flags count once it has `acknowledged` this session.
+    fn controller_stop(
+        &self,
+        silent: f64,
+        asked: &mut Option<u64>,
+        acknowledged: bool,
+    ) -> Option<String> {
         let js = &self.last;
         let dead = silent >= self.cfg.silent_after_ms
             || (silent >= self.cfg.dead_after_ms && {
@@ -418,7 +484,7 @@ impl Cell {
                 },
                 js.seq
             ))
-        } else if js.status & (status::WATCHDOG | status::REJECTED) != 0 && js.setpoint_seq > 0 {
+        } else if js.status & (status::WATCHDOG | status::REJECTED) != 0 && acknowledged {
             Some(format!(
                 "firmware-sim stopped the arm: {}",
                 if js.status & status::WATCHDOG != 0 {

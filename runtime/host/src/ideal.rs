@@ -4,7 +4,7 @@
 
 use embassy_time::Instant;
 use prf_runtime::Runtime;
-use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Plant, Setpoint};
+use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Plant, Setpoint};
 pub use prf_runtime::ideal::IdealCell;
 use prf_runtime::program::Program;
 use prf_runtime::reverse::Reversal;
@@ -45,7 +45,33 @@ pub fn execute_on<P: Plant>(
     plant: &mut P,
 ) -> Result<Execution, P::Error> {
     let mut reversal = Box::new(Reversal::new());
-    let mut ex = Executor::new(rt, program.clone(), home, cfg, &mut reversal);
+    let ex = Executor::new(rt, program.clone(), home, cfg, &mut reversal);
+    drive(rt, ex, max_ticks, plant)
+}
+
+/// A recovery program ([`prf_runtime::recover`]) on `plant`, whose state is `start`:
+/// [`execute_on`] with [`Executor::resuming`].
+pub fn resume_on<P: Plant>(
+    rt: &Runtime<'_>,
+    program: &Program,
+    home: &Pose,
+    cfg: ExecutorConfig,
+    max_ticks: usize,
+    plant: &mut P,
+) -> Result<Execution, P::Error> {
+    let start: Measured = plant.measured();
+    let mut reversal = Box::new(Reversal::new());
+    let ex = Executor::resuming(rt, program.clone(), home, &start, cfg, &mut reversal);
+    drive(rt, ex, max_ticks, plant)
+}
+
+/// Steps `ex` on `plant` until its program is over or `max_ticks`.
+fn drive<P: Plant>(
+    rt: &Runtime<'_>,
+    mut ex: Executor<'_, '_>,
+    max_ticks: usize,
+    plant: &mut P,
+) -> Result<Execution, P::Error> {
     let dt = rt.config.rdmp.dt;
     let tick = embassy_time::Duration::from_micros((dt * 1e6).round() as u64);
     let mut now = Instant::from_ticks(0);
