@@ -940,6 +940,41 @@ fn assert_recovered(r: &serde_json::Value, sp: &[SetpointMsg], js: &[JointStateM
     );
 }
 
+/// The stop between two sessions (the first's last setpoint to the arm at rest, within the
+/// joint, speed and acceleration limits) and the recovery session's retraction (to its first
+/// setpoint on q_a,H), printed as the README's row: stop time and largest joint travel, then
+/// the retraction's time.
+fn stop_and_retraction(sp: &[SetpointMsg], js: &[JointStateMsg], second: usize) {
+    let model = RobotModel::kmr_iiwa14();
+    let (last, resumed) = (&sp[second - 1], &sp[second]);
+    let between: Vec<JointStateMsg> = js
+        .iter()
+        .filter(|m| m.t_ns < resumed.t_ns)
+        .copied()
+        .collect();
+    assert_brakes_to_rest(&between, last.t_ns, &model);
+    let after: Vec<&JointStateMsg> = between.iter().filter(|m| m.t_ns > last.t_ns).collect();
+    let rest = after
+        .iter()
+        .find(|m| m.qd.iter().all(|v| v.abs() < 1e-4))
+        .expect("at rest before the recovery");
+    let travel = after
+        .iter()
+        .take_while(|m| m.t_ns <= rest.t_ns)
+        .flat_map(|m| (0..NA).map(move |j| (m.q[j] - last.q[j]).abs()))
+        .fold(0.0f64, f64::max);
+    let home = sp[second..]
+        .iter()
+        .position(|s| s.q == model.home)
+        .expect("the retraction ends on q_a,H");
+    println!(
+        "stop: at rest {:.0} ms after the last setpoint, largest joint travel {:.1} mrad; retraction to q_a,H {:.2} s",
+        (rest.t_ns - last.t_ns) as f64 * 1e-6,
+        travel * 1e3,
+        home as f64 * 1e-3
+    );
+}
+
 /// Issue 18, recovery: the cell is killed (SIGKILL) mid-reach; firmware-sim's watchdog brakes
 /// the arm; a new `prf run --recover` of the same task finds the arm on the certified reach,
 /// retracts along it to q_a,H and completes the task with the part at its goal.
@@ -968,6 +1003,7 @@ fn a_cell_killed_mid_reach_recovers_along_the_certified_path_and_completes_the_t
     let took = t0.elapsed();
     let (sp, js) = watch.finish();
     println!("killed after {killed_at} setpoints; recovered and completed in {took:.1?}");
+    stop_and_retraction(&sp, &js, killed_at);
     assert_recovered(&report(&json), &sp, &js, killed_at);
 }
 
@@ -1002,5 +1038,6 @@ fn a_stalled_controller_is_recovered_automatically() {
         .rposition(|s| s.flags & flags::FIRST != 0)
         .expect("sessions");
     assert!(second > 0, "a second session");
+    stop_and_retraction(&sp, &js, second);
     assert_recovered(&report(&json), &sp, &js, second);
 }
