@@ -44,7 +44,7 @@ pub struct ExecutorConfig {
     pub gripper_open: f64,
     /// A recovery's retraction ([`Segment::Retract`]) moves at this fraction of the arm's
     /// speed, acceleration and jerk limits back onto the path, and then plays the path back at
-    /// this many samples per tick (0 < x ≤ 1).
+    /// this many samples per tick (0 < x ≤ 1; another value means the default, 0.25).
     pub retract_speed: f64,
     /// Ticks over which the playback speeds up from rest.
     pub retract_ramp: u32,
@@ -60,7 +60,7 @@ impl Default for ExecutorConfig {
             tracking_tolerance: 0.1,
             gripper_closed: 0.95,
             gripper_open: 0.05,
-            retract_speed: 0.25,
+            retract_speed: crate::retract::DEFAULT_SPEED,
             retract_ramp: 1000,
         }
     }
@@ -272,8 +272,8 @@ impl<'r, 'a> Executor<'r, 'a> {
     }
 
     /// An executor that starts from the arm, gripper and platform as measured in `start`
-    /// instead of q_a,H, open and at `home`: the executor of a recovery program ([`crate::recover`]), whose first
-    /// segment brings the arm back to q_a,H.
+    /// instead of q_a,H, open and at `home`: the executor of a recovery program
+    /// ([`crate::recover`]), whose first segment brings the arm back to q_a,H.
     pub fn resuming(
         rt: &'r Runtime<'a>,
         program: Program,
@@ -576,8 +576,8 @@ impl<'r, 'a> Executor<'r, 'a> {
     /// `from` without moving (one RDMP step per tick, recorded for the reversal); move onto
     /// q_from ([`Connect`]); play q_from … q_0 back ([`Playback`], one reversal step per tick).
     fn retract(&mut self, from: u32, sp: &mut Setpoint) -> Result<(), Fault> {
-        let index = sp.segment;
-        let segment = index;
+        let segment = sp.segment;
+        // Until it moves, the arm holds the last setpoint (`sp` starts as it).
         sp.mode = Mode::Arm;
         sp.arm_velocity = [0.0; NA];
         // Prepared once: the replay hands its run to the reversal.
@@ -589,11 +589,10 @@ impl<'r, 'a> Executor<'r, 'a> {
         let rdmp = &self.rdmp;
         let reversal = &mut *self.reversal;
         let reverse_fault = |error| Fault::Reverse { segment, error };
-        // Holding: the last setpoint (`sp` starts as it).
         let q = match phase {
             Retraction::Replay => {
                 let Some(run) = self.run.as_mut() else {
-                    return Err(Fault::Program { segment: index });
+                    return Err(Fault::Program { segment });
                 };
                 if run.progress().0 < from as usize {
                     reversal.record(run);

@@ -15,6 +15,19 @@
 use prf_shared::NA;
 use prf_shared::limits::MotionLimits;
 
+/// The fraction of the limits (and samples per tick) a retraction uses by default, and in
+/// place of a value outside (0, 1].
+pub const DEFAULT_SPEED: f64 = 0.25;
+
+/// `x` if it is in (0, 1], else [`DEFAULT_SPEED`] (never faster on bad input).
+fn speed_or_default(x: f64) -> f64 {
+    if x > 0.0 && x <= 1.0 {
+        x
+    } else {
+        DEFAULT_SPEED
+    }
+}
+
 /// Minimum-jerk profile s(τ), τ ∈ [0, 1].
 fn min_jerk(t: f64) -> f64 {
     let t = t.clamp(0.0, 1.0);
@@ -33,8 +46,8 @@ pub struct Connect {
 }
 
 impl Connect {
-    /// The move from `from` to `to` with every joint within `fraction` (0 < fraction ≤ 1) of its
-    /// speed, acceleration and jerk limits, at `dt` s per tick.
+    /// The move from `from` to `to` with every joint within `fraction` (0 < fraction ≤ 1, else
+    /// [`DEFAULT_SPEED`]) of its speed, acceleration and jerk limits, at `dt` s per tick.
     pub fn new(
         from: [f64; NA],
         to: [f64; NA],
@@ -42,6 +55,7 @@ impl Connect {
         fraction: f64,
         dt: f64,
     ) -> Self {
+        let fraction = speed_or_default(fraction);
         let mut t: f64 = 0.0;
         for j in 0..NA {
             let d = libm::fabs(to[j] - from[j]);
@@ -113,10 +127,10 @@ pub struct Playback {
 
 impl Playback {
     /// A playback of `samples` samples starting at rest at `first` (= P_0), at most `rate`
-    /// samples per tick (clamped to (0, 1]), reached after `ramp` ticks. The samples after the
+    /// samples per tick (0 < rate ≤ 1, else [`DEFAULT_SPEED`]), reached after `ramp` ticks. The samples after the
     /// first are handed in one at a time by [`Playback::feed`].
     pub fn new(first: [f64; NA], samples: u32, rate: f64, ramp: u32) -> Self {
-        let rate = if rate > 0.0 { rate.min(1.0) } else { 1.0 };
+        let rate = speed_or_default(rate);
         Playback {
             buf: [first; 5],
             known: 1,
@@ -260,6 +274,20 @@ mod tests {
             // Discretisation adds a little to the continuous peaks.
             assert!(r.iter().all(|x| *x <= fraction * 1.05), "d {d}: {r:?}");
         }
+    }
+
+    #[test]
+    fn a_speed_outside_0_to_1_means_the_default_never_faster() {
+        let model = RobotModel::kmr_iiwa14();
+        let limits = MotionLimits::kmr_iiwa(&model);
+        let to: [f64; NA] = core::array::from_fn(|j| model.home[j] + 0.1);
+        let ticks = |f: f64| Connect::new(model.home, to, &limits, f, 1e-3).ticks();
+        for bad in [0.0, -1.0, 2.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(ticks(bad), ticks(DEFAULT_SPEED), "fraction {bad}");
+            let p = Playback::new(model.home, 10, bad, 1);
+            assert_eq!(p.rate, DEFAULT_SPEED, "rate {bad}");
+        }
+        assert!(ticks(1.0) < ticks(DEFAULT_SPEED));
     }
 
     #[test]
