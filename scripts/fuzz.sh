@@ -13,11 +13,11 @@
 #
 # A crash stops the run and leaves its input in fuzz/libfuzzer/artifacts/TARGET/; copy it to
 # fuzz/regressions/TARGET/ (the tests replay every file there) once it is fixed.
-# Targets: blob task_block setpoints joint_states dataset world robot.
+# Targets: blob task_block setpoints joint_states dataset world robot kb.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-TARGETS=(blob task_block setpoints joint_states dataset world robot)
+TARGETS=(blob task_block setpoints joint_states dataset world robot kb)
 DIR=fuzz/libfuzzer
 BIN=$DIR/target/x86_64-unknown-linux-gnu/release
 

@@ -9,6 +9,7 @@
 pub mod blob;
 pub mod dataset;
 pub mod joint_states;
+pub mod kb;
 pub mod robot;
 pub mod seeds;
 pub mod setpoints;
@@ -22,7 +23,7 @@ mod fixture;
 pub type Harness = fn(&[u8]);
 
 /// Every target: its name (the directory of its seeds and regressions) and its harness.
-pub const TARGETS: [(&str, Harness); 7] = [
+pub const TARGETS: [(&str, Harness); 8] = [
     ("blob", blob::run),
     ("task_block", task_block::run),
     ("setpoints", setpoints::run),
@@ -30,4 +31,5 @@ pub const TARGETS: [(&str, Harness); 7] = [
     ("dataset", dataset::run),
     ("world", world::run),
     ("robot", robot::run),
+    ("kb", kb::run),
 ];

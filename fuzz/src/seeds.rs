@@ -7,6 +7,8 @@ use crate::setpoints;
 use prf_files::robot::{EXAMPLE_SPHERES, EXAMPLE_URDF};
 use prf_firmware_sim::controller::Input;
 use prf_ipc::messages::{SetpointMsg, flags};
+use prf_learn::LearnConfig;
+use prf_learn::learn::Learner;
 use prf_runtime::executor::Mode;
 use prf_sim::world::EXAMPLE_WORLD;
 use std::path::Path;
@@ -73,6 +75,12 @@ pub fn all(dataset: &Path) -> anyhow::Result<Vec<(&'static str, String, Vec<u8>)
         ));
     }
     out.push(("world", "example-world.json".into(), EXAMPLE_WORLD.into()));
+    // The example cell's knowledge base before its first program (one program's is 1.9 MB:
+    // too slow a seed; the fuzzer grows sweeps from this one).
+    let model = prf_files::robot::example()?;
+    let ds = prf_files::dataset::Dataset::read(dataset, &model)?;
+    let learner = Learner::new(&ds, &model, &LearnConfig::default())?;
+    out.push(("kb", "empty.kb".into(), learner.save()));
     for (kind, name, text) in [
         (0u8, "urdf.bin", EXAMPLE_URDF),
         (1, "spheres.bin", EXAMPLE_SPHERES),

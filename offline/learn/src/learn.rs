@@ -17,7 +17,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Settings of Learn.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LearnConfig {
     /// r_d to learn with, m: None takes the dataset's stated r_d; a value must not exceed it
     /// (a smaller one is more conservative). The workspaces are dilated by ε = r_d − r.
@@ -105,6 +105,8 @@ pub struct Lesson {
 pub struct Lessons {
     /// The demonstration's id.
     pub demonstration: String,
+    /// Its [`fingerprint`].
+    pub fingerprint: u32,
     lessons: Vec<Lesson>,
 }
 
@@ -135,6 +137,23 @@ pub enum LearnError {
         demonstration: String,
         what: &'static str,
     },
+    #[error(
+        "the dataset is of another cell: location types {locations:?} and part types {parts:?}, the knowledge base's are {kb_locations:?} and {kb_parts:?}"
+    )]
+    OtherCell {
+        locations: Vec<String>,
+        parts: Vec<String>,
+        kb_locations: Vec<String>,
+        kb_parts: Vec<String>,
+    },
+    #[error(
+        "the dataset states r_d = {stated} m, below the knowledge base's r_d = {kb} m: its programs kept less clearance than the workspaces were dilated for (ε = r_d − r), so adding them would make risk 0 unsafe; learn everything again with the smaller r_d"
+    )]
+    ClearanceBelowKb { stated: f64, kb: f64 },
+    #[error(
+        "demonstration {id} is already in the knowledge base (as {as_id}: the same trajectory); adding it twice would count its affordances twice"
+    )]
+    AlreadyAdded { id: String, as_id: String },
     #[error("demonstration {demonstration}: part type {kind} is not among the dataset's parts")]
     PartType { demonstration: String, kind: String },
     #[error(
@@ -320,13 +339,22 @@ pub fn learn(
     progress: OnProgress<'_>,
 ) -> Result<Knowledge, LearnError> {
     let mut learner = Learner::new(ds, model, cfg)?;
+    learn_into(&mut learner, &ds.demonstrations, progress)
+}
+
+/// [`learn`] into an existing learner: `demos`' lessons (in parallel), added in order, then
+/// the fields of the location types they touch rebuilt (`prf learn --add`, [`crate::kb`]).
+pub fn learn_into(
+    learner: &mut Learner,
+    demos: &[Demonstration],
+    progress: OnProgress<'_>,
+) -> Result<Knowledge, LearnError> {
     progress(Progress::Total(
-        (ds.demonstrations.len() + learner.location_kinds.len()) as u64,
+        (demos.len() + learner.location_kinds.len()) as u64,
     ));
     let t0 = Instant::now();
     // Lines 4–16, in parallel over demonstrations; merged in dataset order (deterministic).
-    let per_demo: Vec<Lessons> = ds
-        .demonstrations
+    let per_demo: Vec<Lessons> = demos
         .par_iter()
         .map(|d| {
             let l = learner.lessons(d);
@@ -374,6 +402,8 @@ pub struct Learner {
     skills: Vec<Skill>,
     instances: Vec<(&'static str, usize)>,
     demonstrations: usize,
+    /// The demonstrations added, in order: id and [`fingerprint`].
+    ids: Vec<(String, u32)>,
 }
 
 impl Learner {
@@ -419,6 +449,7 @@ impl Learner {
             skills: Vec::new(),
             instances: CLASSES.iter().map(|c| (c.name(), 0)).collect(),
             demonstrations: 0,
+            ids: Vec::new(),
         })
     }
 
@@ -427,6 +458,7 @@ impl Learner {
     pub fn lessons(&self, d: &Demonstration) -> Result<Lessons, LearnError> {
         Ok(Lessons {
             demonstration: d.id.clone(),
+            fingerprint: fingerprint(d),
             lessons: lessons(
                 &self.robot,
                 &self.location_kinds,
@@ -441,6 +473,8 @@ impl Learner {
     /// (line 11) for [`Learner::knowledge`].
     pub fn add(&mut self, lessons: &Lessons) {
         self.demonstrations += 1;
+        self.ids
+            .push((lessons.demonstration.clone(), lessons.fingerprint));
         for l in &lessons.lessons {
             if let Some(c) = self.instances.iter_mut().find(|c| c.0 == l.class) {
                 c.1 += 1;
@@ -503,6 +537,263 @@ impl Learner {
         self.demonstrations
     }
 
+    /// The demonstrations added so far, in order: id and [`fingerprint`].
+    pub fn ids(&self) -> &[(String, u32)] {
+        &self.ids
+    }
+
+    /// The location and part type names the learner knows (a demonstration of another type
+    /// cannot be added).
+    pub fn kinds(&self) -> (&[String], &[String]) {
+        (&self.location_kinds, &self.part_kinds)
+    }
+
+    /// The robot model learned for.
+    pub fn robot(&self) -> &RobotModel {
+        &self.robot
+    }
+
+    /// Whether `ds`'s demonstrations may be added: the same cell (location and part types),
+    /// a stated r_d at least the one learned with (programs that kept less clearance would
+    /// make ε unsafe), and no demonstration id already added.
+    pub fn admits(&self, ds: &Dataset) -> Result<(), LearnError> {
+        let (locations, parts) = (location_kinds(ds), part_kinds(ds));
+        if locations != self.location_kinds || parts != self.part_kinds {
+            return Err(LearnError::OtherCell {
+                locations,
+                parts,
+                kb_locations: self.location_kinds.clone(),
+                kb_parts: self.part_kinds.clone(),
+            });
+        }
+        match ds.clearance_demo {
+            None => return Err(LearnError::NoClearance),
+            Some(r) if !(r >= self.clearance_demo) => {
+                return Err(LearnError::ClearanceBelowKb {
+                    stated: r,
+                    kb: self.clearance_demo,
+                });
+            }
+            Some(_) => {}
+        }
+        for d in &ds.demonstrations {
+            let f = fingerprint(d);
+            if let Some((id, _)) = self.ids.iter().find(|(_, g)| *g == f) {
+                return Err(LearnError::AlreadyAdded {
+                    id: d.id.clone(),
+                    as_id: id.clone(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The learner's whole state as a knowledge-base file ([`crate::kb`]).
+    pub fn save(&self) -> Vec<u8> {
+        use crate::kb::*;
+        let affordances = |a: &AffordanceSet| AffordanceState {
+            poses: a.poses.iter().map(pose_state).collect(),
+            counts: a.counts.clone(),
+        };
+        let v = |c: &nalgebra::Vector3<f64>| [c.x, c.y, c.z];
+        encode(&LearnerState {
+            robot: RobotState::of(&self.robot),
+            description: self.description.clone(),
+            config: self.config,
+            clearance_demo: self.clearance_demo,
+            location_kinds: self.location_kinds.clone(),
+            part_kinds: self.part_kinds.clone(),
+            location_types: self
+                .location_types
+                .iter()
+                .map(|t| (affordances(&t.stances), t.field.clone(), t.instances))
+                .collect(),
+            part_types: self
+                .part_types
+                .iter()
+                .map(|p| affordances(&p.grasps))
+                .collect(),
+            sweeps: self.sweeps.iter().map(Sweep::to_state).collect(),
+            pending: self
+                .pending
+                .iter()
+                .map(|per| {
+                    per.iter()
+                        .map(|path| path.iter().map(|s| (v(&s.centre), s.sphere)).collect())
+                        .collect()
+                })
+                .collect(),
+            arms: self
+                .arms
+                .iter()
+                .map(|a| ArmState {
+                    rdmp: RdmpState::of(&a.rdmp),
+                    path: a.path.clone(),
+                    dt: a.dt,
+                })
+                .collect(),
+            skills: self
+                .skills
+                .iter()
+                .map(|k| SkillState {
+                    class: k.class.to_string(),
+                    rdmp: k.rdmp,
+                    location_type: k.location_type,
+                    part_type: k.part_type,
+                    demo: k.demo.clone(),
+                    shared: k.shared,
+                })
+                .collect(),
+            instances: self
+                .instances
+                .iter()
+                .map(|(c, n)| (c.to_string(), *n))
+                .collect(),
+            demonstrations: self.demonstrations,
+            ids: self.ids.clone(),
+        })
+    }
+
+    /// The learner a knowledge-base file ([`Learner::save`]) holds.
+    pub fn load(bytes: &[u8]) -> Result<Self, crate::kb::KbError> {
+        use crate::kb::*;
+        let st = decode(bytes)?;
+        let class = |name: &str| {
+            CLASSES
+                .iter()
+                .map(|c| c.name())
+                .find(|n| *n == name)
+                .ok_or_else(|| KbError::Class(name.to_string()))
+        };
+        let affordances = |a: &AffordanceState| -> Result<AffordanceSet, KbError> {
+            Ok(AffordanceSet {
+                poses: a
+                    .poses
+                    .iter()
+                    .map(|p| pose_of(*p))
+                    .collect::<Result<_, _>>()?,
+                counts: a.counts.clone(),
+            })
+        };
+        let types = st.location_kinds.len();
+        if st.location_types.len() != types || st.sweeps.len() != types || st.pending.len() != types
+        {
+            return Err(KbError::Decode(format!(
+                "{types} location types, but {} type records, {} sweeps, {} queues",
+                st.location_types.len(),
+                st.sweeps.len(),
+                st.pending.len()
+            )));
+        }
+        if st.part_types.len() != st.part_kinds.len() {
+            return Err(KbError::Decode(format!(
+                "{} part types, but {} grasp sets",
+                st.part_kinds.len(),
+                st.part_types.len()
+            )));
+        }
+        let mut location_types = Vec::new();
+        for (name, (stances, field, instances)) in st.location_kinds.iter().zip(&st.location_types)
+        {
+            location_types.push(LocationTypeKnowledge {
+                name: name.clone(),
+                stances: affordances(stances)?,
+                field: field.clone(),
+                instances: *instances,
+            });
+        }
+        let mut part_types = Vec::new();
+        for (name, grasps) in st.part_kinds.iter().zip(&st.part_types) {
+            part_types.push(PartTypeKnowledge {
+                name: name.clone(),
+                grasps: affordances(grasps)?,
+            });
+        }
+        let mut arms = Vec::new();
+        for a in &st.arms {
+            arms.push(ArmSkill {
+                rdmp: a
+                    .rdmp
+                    .rdmp()
+                    .ok_or_else(|| KbError::Decode("an RDMP's weights are cut short".into()))?,
+                path: a.path.clone(),
+                dt: a.dt,
+            });
+        }
+        let (n_types, n_parts) = (st.location_kinds.len(), st.part_kinds.len());
+        let mut skill_list = Vec::new();
+        for k in &st.skills {
+            let fits = k.rdmp.is_none_or(|i| i < arms.len())
+                && k.location_type.is_none_or(|t| t < n_types)
+                && k.part_type.is_none_or(|p| p < n_parts);
+            if !fits {
+                return Err(KbError::Decode(format!(
+                    "skill of {} names an RDMP, location type or part type that is not there",
+                    k.demo
+                )));
+            }
+            skill_list.push(Skill {
+                class: class(&k.class)?,
+                rdmp: k.rdmp,
+                location_type: k.location_type,
+                part_type: k.part_type,
+                demo: k.demo.clone(),
+                shared: k.shared,
+            });
+        }
+        let mut instances = Vec::new();
+        for (c, n) in &st.instances {
+            instances.push((class(c)?, *n));
+        }
+        check_state(&st)?;
+        let v = |c: [f64; 3]| nalgebra::Vector3::new(c[0], c[1], c[2]);
+        let sweeps: Vec<Sweep> = st.sweeps.into_iter().map(Sweep::from_state).collect();
+        let nodes = sweeps
+            .iter()
+            .map(|s| s.grid_nodes(&st.config.workspace))
+            .max()
+            .unwrap_or(0);
+        if nodes > MAX_GRID_NODES {
+            return Err(KbError::Decode(format!(
+                "a workspace grid of {nodes} nodes (at most {MAX_GRID_NODES})"
+            )));
+        }
+        Ok(Learner {
+            robot: st.robot.model()?,
+            description: st.description,
+            config: st.config,
+            clearance_demo: st.clearance_demo,
+            location_kinds: st.location_kinds,
+            part_kinds: st.part_kinds,
+            location_types,
+            part_types,
+            sweeps,
+            pending: st
+                .pending
+                .into_iter()
+                .map(|per| {
+                    per.into_iter()
+                        .map(|path| {
+                            Arc::new(
+                                path.into_iter()
+                                    .map(|(c, sphere)| PathSphere {
+                                        centre: v(c),
+                                        sphere,
+                                    })
+                                    .collect(),
+                            )
+                        })
+                        .collect()
+                })
+                .collect(),
+            arms,
+            skills: skill_list,
+            instances,
+            demonstrations: st.demonstrations,
+            ids: st.ids,
+        })
+    }
+
     /// What was learned so far (Alg. 3's output, line 20's share() included): the fields of
     /// the location types touched since the last call are rebuilt (in parallel; `progress`
     /// is told of each), the others kept.
@@ -544,6 +835,57 @@ impl Learner {
             timings: Vec::new(),
         }
     }
+}
+
+/// The most nodes a loaded knowledge base's workspace grid may have (about 200 MB of splat;
+/// the example cell's have about 0.2 M).
+const MAX_GRID_NODES: usize = 16 << 20;
+
+/// The numbers of a knowledge base that size what learning allocates or index what it
+/// reads: settings in range (lengths within [0, 1] m, the voxel within [1 mm, 1 m]), swept
+/// spheres finite within 100 m, radii in (0, 1] m, sphere indices of the robot.
+fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
+    let bad = |what: &str| Err(crate::kb::KbError::Decode(format!("{what} out of range")));
+    let w = &st.config.workspace;
+    let non_negative = |x: f64| (0.0..=1.0).contains(&x);
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    let settings = (1e-3..=1.0).contains(&w.voxel)
+        && positive(w.feature_spacing)
+        && positive(w.resample)
+        && [w.epsilon, w.reach, w.far, w.certify_margin]
+            .into_iter()
+            .all(non_negative);
+    if !settings {
+        return bad("a workspace setting");
+    }
+    let point = |c: &[f64; 3]| c.iter().all(|x| x.is_finite() && x.abs() <= 100.0);
+    let ball = |(c, r): &([f64; 3], f64)| point(c) && *r > 0.0 && *r <= 1.0;
+    for s in &st.sweeps {
+        if !s.spheres.iter().all(ball) || !s.features.iter().all(ball) {
+            return bad("a swept sphere");
+        }
+        if s.feature_spacing != w.feature_spacing {
+            return bad("a sweep's feature spacing");
+        }
+    }
+    let spheres = st.robot.spheres();
+    let swept = |(c, i): &([f64; 3], u8)| point(c) && (*i as usize) < spheres;
+    if !st.pending.iter().flatten().flatten().all(swept) {
+        return bad("a queued sphere");
+    }
+    Ok(())
+}
+
+/// CRC-32 of a demonstration's trajectory (every sample's bits): the same program has the
+/// same fingerprint whatever its id.
+pub fn fingerprint(d: &Demonstration) -> u32 {
+    let mut digest = prf_shared::blob::CRC32.digest();
+    for s in &d.samples {
+        for v in [s.t, s.gripper].iter().chain(&s.base).chain(&s.arm) {
+            digest.update(&v.to_le_bytes());
+        }
+    }
+    digest.finalize()
 }
 
 /// Skills per class, in [`CLASSES`] order.

@@ -2,6 +2,7 @@
 //!
 //! - [`learn`](mod@learn): the pass over the dataset, driven by the motion classes of
 //!   [`prf_shared::motion::CLASSES`];
+//! - [`kb`]: the knowledge base, a learner's whole state on disk, for `prf learn --add`;
 //! - [`affordance`]: stances and grasps with tolerance;
 //! - [`workspace`] (+ [`edt`]): Ω+ per location type as a conservative distance field;
 //! - [`skills`]: TrainRDMP on arm motions, the skill sets and share();
@@ -14,6 +15,7 @@
 pub mod affordance;
 pub mod compile;
 pub mod edt;
+pub mod kb;
 pub mod learn;
 pub mod report;
 pub mod skills;

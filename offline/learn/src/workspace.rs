@@ -29,7 +29,7 @@ use prf_shared::se3::Pose;
 use std::collections::HashSet;
 
 /// Settings of workspace learning.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WorkspaceConfig {
     /// Dilation ε = r_d − r, m.
     pub epsilon: f64,
@@ -168,6 +168,82 @@ impl Sweep {
         out
     }
 
+    /// The sweep as plain data, for the knowledge-base file ([`crate::kb`]).
+    pub(crate) fn to_state(&self) -> crate::kb::SweepState {
+        let v = |p: &Vector3<f64>| [p.x, p.y, p.z];
+        crate::kb::SweepState {
+            spheres: self
+                .spheres
+                .iter()
+                .map(|s| (v(&s.centre), s.radius))
+                .collect(),
+            seen: sorted(self.seen.iter().copied()),
+            feature_spacing: self.feature_spacing,
+            features: self.features.iter().map(|(c, r)| (v(c), *r)).collect(),
+            kept: sorted(self.kept.iter().copied()),
+            splat: self.splat.as_ref().map(|s| crate::kb::SplatState {
+                origin: v(&s.key.0),
+                dims: s.key.1,
+                grid: [s.key.2, s.key.3, s.key.4],
+                value: s.value.clone(),
+                feature: s.feature.clone(),
+                done: s.done,
+            }),
+        }
+    }
+
+    /// Nodes of the grid a field build of this sweep would allocate with `cfg`.
+    pub(crate) fn grid_nodes(&self, cfg: &WorkspaceConfig) -> usize {
+        if self.features.is_empty() {
+            return 0;
+        }
+        let balls: Vec<(Vector3<f64>, f64)> = self
+            .features
+            .iter()
+            .map(|(c, r)| (*c, r + cfg.epsilon))
+            .collect();
+        let (_, dims) = grid(&balls, cfg);
+        dims.iter().fold(1usize, |n, d| n.saturating_mul(*d))
+    }
+
+    /// The sweep [`Sweep::to_state`] gave. A splat that does not fit its grid is dropped (it
+    /// is a cache: the next build splats afresh, to the same values).
+    pub(crate) fn from_state(s: crate::kb::SweepState) -> Self {
+        let v = |p: [f64; 3]| Vector3::new(p[0], p[1], p[2]);
+        let features = s.features.len();
+        Sweep {
+            spheres: s
+                .spheres
+                .into_iter()
+                .map(|(c, radius)| SphereSample {
+                    centre: v(c),
+                    radius,
+                })
+                .collect(),
+            seen: s.seen.into_iter().collect(),
+            feature_spacing: s.feature_spacing,
+            features: s.features.into_iter().map(|(c, r)| (v(c), r)).collect(),
+            kept: s.kept.into_iter().collect(),
+            splat: s
+                .splat
+                .filter(|p| {
+                    let n = p.dims.iter().fold(1usize, |n, d| n.saturating_mul(*d));
+                    p.value.len() == n
+                        && p.feature.len() == n
+                        && p.done <= features
+                        && p.feature
+                            .iter()
+                            .all(|f| *f == u32::MAX || (*f as usize) < p.done)
+                })
+                .map(|p| Splat {
+                    key: (v(p.origin), p.dims, p.grid[0], p.grid[1], p.grid[2]),
+                    value: p.value,
+                    feature: p.feature,
+                    done: p.done,
+                }),
+        }
+    }
+
     /// Adds spheres (from [`Sweep::path_spheres`]) not seen yet.
     pub fn add_spheres(&mut self, model: &RobotModel, spheres: &[PathSphere]) {
         for s in spheres {
@@ -194,8 +270,15 @@ impl Sweep {
     }
 }
 
+/// The items in order (a set written the same way every time).
+fn sorted<T: Ord>(items: impl Iterator<Item = T>) -> Vec<T> {
+    let mut v: Vec<T> = items.collect();
+    v.sort_unstable();
+    v
+}
+
 /// The encoded field of one workspace and figures about it.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LearnedField {
     pub origin: [f32; 3],
     pub voxel: f32,
@@ -247,9 +330,13 @@ fn grid(balls: &[(Vector3<f64>, f64)], cfg: &WorkspaceConfig) -> (Vector3<f64>, 
     let first = (lo - Vector3::repeat(margin)).map(|v| (v / step).floor());
     let last = (hi + Vector3::repeat(margin)).map(|v| (v / step).ceil());
     let lo = first.map(|k| (k * step) as f32 as f64);
+    // Saturating: a hostile knowledge base's extents must not overflow (its grid is then
+    // refused by size).
     let dims = core::array::from_fn(|a| {
-        let n = ((last[a] - first[a]) as usize) * ANCHOR + 1;
-        n.div_ceil(BRICK) * BRICK
+        let n = ((last[a] - first[a]) as usize)
+            .saturating_mul(ANCHOR)
+            .saturating_add(1);
+        n.div_ceil(BRICK).saturating_mul(BRICK)
     });
     (lo, dims)
 }

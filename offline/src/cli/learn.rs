@@ -4,14 +4,16 @@ use crate::cli::progress::Bar;
 use anyhow::Context;
 use prf_files::dataset::Dataset;
 use prf_files::robot;
-use prf_learn::{LearnConfig, compile, learn, learn::skills_per_class, report};
+use prf_learn::learn::{Learner, fingerprint, learn_into, skills_per_class};
+use prf_learn::{LearnConfig, compile, report};
 use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Dataset directory (as written by `prf gen`).
-    pub dataset: PathBuf,
+    #[arg(required_unless_present = "into")]
+    pub dataset: Option<PathBuf>,
     /// Output blob.
     #[arg(short, long, default_value = "cell.blob")]
     pub output: PathBuf,
@@ -37,18 +39,41 @@ pub struct Args {
     /// Every demonstrated sphere is certified with this margin, m.
     #[arg(long, default_value_t = 0.001)]
     pub margin: f64,
+    /// Also write the knowledge base (the learner's whole state) to this file, for
+    /// `--add … --into`.
+    #[arg(long, conflicts_with = "into")]
+    pub kb: Option<PathBuf>,
+    /// Fold the demonstrations of these datasets (each a directory as `prf gen` writes, of
+    /// the same cell) into the knowledge base `--into`, in order, without learning the rest
+    /// again: only the fields of the location types they touch are rebuilt. Writes the
+    /// updated knowledge base and the blob (`-o`).
+    #[arg(long, num_args = 1.., requires = "into", value_name = "DATASET")]
+    pub add: Vec<PathBuf>,
+    /// The knowledge base `--add` updates (written by `prf learn DATASET --kb FILE`).
+    #[arg(
+        long,
+        requires = "add",
+        conflicts_with_all = ["dataset", "urdf", "spheres", "clearance_demo", "clearance", "voxel", "far", "margin"]
+    )]
+    pub into: Option<PathBuf>,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    if let Some(kb) = &a.into {
+        return add(a, kb);
+    }
+    let Some(dataset) = &a.dataset else {
+        anyhow::bail!("no dataset given");
+    };
     let t0 = Instant::now();
     let model = match (&a.urdf, &a.spheres) {
         (Some(u), Some(s)) => robot::load(u, s)?,
         _ => robot::example()?,
     };
-    let ds = Dataset::read(&a.dataset, &model)?;
+    let ds = Dataset::read(dataset, &model)?;
     let t_read = t0.elapsed().as_secs_f64();
     let mut cfg = LearnConfig {
         clearance_demo: a.clearance_demo,
@@ -60,7 +85,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     cfg.workspace.certify_margin = a.margin;
     let bar = Bar::new("learning", "units", a.quiet);
     let t1 = Instant::now();
-    let k = learn(&ds, &model, &cfg, &|p| bar.report(p))?;
+    let mut learner = Learner::new(&ds, &model, &cfg)?;
+    let k = learn_into(&mut learner, &ds.demonstrations, &|p| bar.report(p))?;
     let t_learn = t1.elapsed().as_secs_f64();
     bar.finish();
     let t2 = Instant::now();
@@ -68,13 +94,17 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let t_compile = t2.elapsed().as_secs_f64();
     prf_files::atomic::write(&a.output, &bytes)
         .with_context(|| format!("writing {}", a.output.display()))?;
+    if let Some(kb) = &a.kb {
+        prf_files::atomic::write(kb, learner.save())
+            .with_context(|| format!("writing {}", kb.display()))?;
+    }
     if a.quiet {
         return Ok(());
     }
     println!(
         "learned from {} demonstrations in {}: {}",
         k.demonstrations,
-        a.dataset.display(),
+        dataset.display(),
         k.instances
             .iter()
             .map(|(c, n)| format!("{n} {c}"))
@@ -102,5 +132,69 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             .join(", ")
     );
     println!("wrote {}", a.output.display());
+    Ok(())
+}
+
+/// `prf learn --add DATASET… --into KB`: the knowledge base, the new demonstrations folded in,
+/// the blob compiled; both written whole or not at all.
+fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let bytes = std::fs::read(kb).with_context(|| format!("reading {}", kb.display()))?;
+    let mut learner = Learner::load(&bytes).with_context(|| format!("reading {}", kb.display()))?;
+    let t_load = t0.elapsed().as_secs_f64();
+    let before = learner.demonstrations();
+    let mut demos = Vec::new();
+    for dir in &a.add {
+        let ds = Dataset::read(dir, learner.robot())?;
+        learner
+            .admits(&ds)
+            .with_context(|| format!("adding {} to {}", dir.display(), kb.display()))?;
+        demos.extend(ds.demonstrations);
+    }
+    let prints: Vec<u32> = demos.iter().map(fingerprint).collect();
+    for (i, d) in demos.iter().enumerate() {
+        if let Some(j) = prints[..i].iter().position(|p| *p == prints[i]) {
+            anyhow::bail!(
+                "demonstration {} is given twice (also as {}: the same trajectory)",
+                d.id,
+                demos[j].id
+            );
+        }
+    }
+    let t1 = Instant::now();
+    let k = learn_into(&mut learner, &demos, &|_| {})?;
+    let t_learn = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let blob = compile(&k)?;
+    let t_compile = t2.elapsed().as_secs_f64();
+    let t3 = Instant::now();
+    prf_files::atomic::write(&a.output, &blob)
+        .with_context(|| format!("writing {}", a.output.display()))?;
+    prf_files::atomic::write(kb, learner.save())
+        .with_context(|| format!("writing {}", kb.display()))?;
+    let t_write = t3.elapsed().as_secs_f64();
+    if !a.quiet {
+        println!(
+            "added {} demonstration(s) to {} ({before} → {}): {}",
+            demos.len(),
+            kb.display(),
+            learner.demonstrations(),
+            demos
+                .iter()
+                .map(|d| d.id.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        println!(
+            "time: load {t_load:.3} s, learn {t_learn:.3} s ({}), compile {t_compile:.3} s, write {t_write:.3} s; total {:.3} s",
+            k.timings
+                .iter()
+                .map(|(n, t)| format!("{n} {t:.3} s"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            t0.elapsed().as_secs_f64()
+        );
+        println!("wrote {} and {}", a.output.display(), kb.display());
+    }
     Ok(())
 }

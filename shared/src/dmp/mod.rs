@@ -25,7 +25,7 @@ pub use rotation::{RotationDmp, RotationState};
 pub const MAX_BASES: usize = 50;
 
 /// Gains and basis count shared by every DMP of a skill.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DmpParams {
     /// Number of Gaussian bases n_g (2..=[`MAX_BASES`]).
     pub n_basis: usize,

@@ -1,0 +1,350 @@
+//! The knowledge base: a [`crate::learn::Learner`]'s whole state in one file, so that
+//! `prf learn --add DEMO --into KB` folds new demonstrations into what was learned without
+//! learning the rest again (issue 17): the new demonstrations' lessons are computed, merged,
+//! and only the fields of the location types they touch are rebuilt, continuing from the
+//! kept sweeps and splats.
+//!
+//! The blob is not the container for this: it holds the encoded fields, not the swept
+//! spheres they were built from, nor the demonstrated paths that tell equal skills apart.
+//!
+//! File layout: `PRF-KB` magic, format version (u32 LE), payload length (u64 LE), CRC-32
+//! (the blob's, [`prf_shared::blob::crc32`]) of the payload (u32 LE), then the payload: [`LearnerState`] in postcard.
+
+use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
+use prf_shared::NA;
+use prf_shared::dmp::{DmpParams, MAX_BASES};
+use prf_shared::rdmp::Rdmp;
+use prf_shared::robot::{Joint, PlatformBox, RobotModel, Sphere};
+use prf_shared::se3::Pose;
+use serde::{Deserialize, Serialize};
+
+/// The file's first bytes.
+pub const MAGIC: [u8; 6] = *b"PRF-KB";
+/// The layout of [`LearnerState`] this build reads and writes.
+pub const VERSION: u32 = 1;
+const HEADER: usize = 6 + 4 + 8 + 4;
+
+/// Why a knowledge-base file cannot be read.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum KbError {
+    #[error(
+        "not a knowledge base (no PRF-KB header): write one with `prf learn DATASET --kb FILE`"
+    )]
+    Magic,
+    #[error("knowledge base format version {found}, this build reads {VERSION}: learn it again")]
+    Version { found: u32 },
+    #[error("the knowledge base is cut short: {len} bytes, its header says {expected}")]
+    Truncated { len: usize, expected: usize },
+    #[error("the knowledge base is corrupt: CRC-32 {found:08x}, its header says {expected:08x}")]
+    Crc { found: u32, expected: u32 },
+    #[error("the knowledge base does not decode: {0}")]
+    Decode(String),
+    #[error("the knowledge base names a motion class this build does not have: {0:?}")]
+    Class(String),
+    #[error("the knowledge base's robot model is invalid: {0}")]
+    Robot(String),
+}
+
+/// A learner as plain data (see [`crate::learn::Learner`] for the meaning of each field).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct LearnerState {
+    pub robot: RobotState,
+    pub description: String,
+    pub config: crate::learn::LearnConfig,
+    pub clearance_demo: f64,
+    pub location_kinds: Vec<String>,
+    pub part_kinds: Vec<String>,
+    /// Per location type: stances, field, instances.
+    pub location_types: Vec<(
+        AffordanceState,
+        Option<crate::workspace::LearnedField>,
+        usize,
+    )>,
+    /// Per part type: grasps.
+    pub part_types: Vec<AffordanceState>,
+    pub sweeps: Vec<SweepState>,
+    /// Per location type, the swept spheres not yet in its field: (centre, sphere index).
+    pub pending: Vec<Vec<Vec<PathSphereState>>>,
+    pub arms: Vec<ArmState>,
+    pub skills: Vec<SkillState>,
+    pub instances: Vec<(String, usize)>,
+    pub demonstrations: usize,
+    /// The demonstrations added, in order: id and fingerprint.
+    pub ids: Vec<(String, u32)>,
+}
+
+/// A pose exactly as held: [x, y, z, qw, qx, qy, qz] (no normalisation, no sign flip).
+pub(crate) fn pose_state(p: &Pose) -> [f64; 7] {
+    let (t, q) = (p.translation.vector, p.rotation.quaternion());
+    [t.x, t.y, t.z, q.w, q.i, q.j, q.k]
+}
+
+/// The pose [`pose_state`] gave; a non-finite one is refused.
+pub(crate) fn pose_of(a: [f64; 7]) -> Result<Pose, KbError> {
+    if a.iter().any(|v| !v.is_finite()) {
+        return Err(KbError::Decode(format!("a pose is not finite: {a:?}")));
+    }
+    Ok(Isometry3::from_parts(
+        Translation3::new(a[0], a[1], a[2]),
+        UnitQuaternion::new_unchecked(Quaternion::new(a[3], a[4], a[5], a[6])),
+    ))
+}
+
+/// A swept sphere: centre, index in the robot model.
+pub(crate) type PathSphereState = ([f64; 3], u8);
+
+/// A joint: origin, axis, lower, upper, max speed.
+type JointState = ([f64; 7], [f64; 3], f64, f64, f64);
+
+/// A robot model exactly (the blob's record normalises its quaternions).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct RobotState {
+    mount: [f64; 7],
+    /// Per joint: origin, axis, lower, upper, max speed.
+    joints: Vec<JointState>,
+    flange: [f64; 7],
+    tcp: [f64; 7],
+    spheres: Vec<(u8, [f64; 3], f64)>,
+    platform: ([f64; 3], [f64; 3]),
+    home: [f64; NA],
+    sphere_margin: f64,
+}
+
+impl RobotState {
+    /// Number of collision spheres.
+    pub fn spheres(&self) -> usize {
+        self.spheres.len()
+    }
+
+    pub fn of(m: &RobotModel) -> Self {
+        let v = |x: &Vector3<f64>| [x.x, x.y, x.z];
+        RobotState {
+            mount: pose_state(&m.mount),
+            joints: m
+                .joints
+                .iter()
+                .map(|j| {
+                    let a = j.axis.into_inner();
+                    (pose_state(&j.origin), v(&a), j.lower, j.upper, j.max_speed)
+                })
+                .collect(),
+            flange: pose_state(&m.flange),
+            tcp: pose_state(&m.tcp),
+            spheres: m
+                .spheres
+                .iter()
+                .map(|s| (s.link, v(&s.centre), s.radius))
+                .collect(),
+            platform: (v(&m.platform.centre), v(&m.platform.half_extents)),
+            home: m.home,
+            sphere_margin: m.sphere_margin,
+        }
+    }
+
+    /// The model, validated ([`RobotModel::validate`]).
+    pub fn model(&self) -> Result<RobotModel, KbError> {
+        let v = |a: [f64; 3]| Vector3::new(a[0], a[1], a[2]);
+        if self.joints.len() != NA {
+            return Err(KbError::Robot(format!(
+                "{} joints, not {NA}",
+                self.joints.len()
+            )));
+        }
+        let mut joints = [Joint::unset(); NA];
+        for (j, &(origin, axis, lower, upper, max_speed)) in joints.iter_mut().zip(&self.joints) {
+            *j = Joint {
+                origin: pose_of(origin)?,
+                axis: Unit::new_unchecked(v(axis)),
+                lower,
+                upper,
+                max_speed,
+            };
+        }
+        let mut spheres = heapless::Vec::new();
+        for &(link, centre, radius) in &self.spheres {
+            spheres
+                .push(Sphere {
+                    link,
+                    centre: v(centre),
+                    radius,
+                })
+                .map_err(|_| KbError::Robot("too many spheres".into()))?;
+        }
+        let m = RobotModel {
+            mount: pose_of(self.mount)?,
+            joints,
+            flange: pose_of(self.flange)?,
+            tcp: pose_of(self.tcp)?,
+            spheres,
+            platform: PlatformBox {
+                centre: v(self.platform.0),
+                half_extents: v(self.platform.1),
+            },
+            home: self.home,
+            sphere_margin: self.sphere_margin,
+        };
+        m.validate().map_err(|e| KbError::Robot(format!("{e:?}")))?;
+        Ok(m)
+    }
+}
+
+/// An affordance set: poses ([`pose_state`]) and their counts.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct AffordanceState {
+    pub poses: Vec<[f64; 7]>,
+    pub counts: Vec<usize>,
+}
+
+/// A [`crate::workspace::Sweep`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct SweepState {
+    pub spheres: Vec<([f64; 3], f64)>,
+    pub seen: Vec<(i32, i32, i32, u8)>,
+    pub feature_spacing: f64,
+    pub features: Vec<([f64; 3], f64)>,
+    pub kept: Vec<(i64, i64, i64, i64)>,
+    pub splat: Option<SplatState>,
+}
+
+/// The last field build's splat of a sweep.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct SplatState {
+    pub origin: [f64; 3],
+    pub dims: [usize; 3],
+    pub grid: [f64; 3],
+    pub value: Vec<f64>,
+    pub feature: Vec<u32>,
+    pub done: usize,
+}
+
+/// A [`crate::skills::ArmSkill`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct ArmState {
+    pub rdmp: RdmpState,
+    pub path: Vec<[f64; 7]>,
+    pub dt: f64,
+}
+
+/// A [`crate::skills::Skill`], its class by name.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct SkillState {
+    pub class: String,
+    pub rdmp: Option<usize>,
+    pub location_type: Option<usize>,
+    pub part_type: Option<usize>,
+    pub demo: String,
+    pub shared: bool,
+}
+
+/// An [`Rdmp`] exactly: its three DMPs' parameters, durations and forcing terms, the
+/// rotation's travel and γ's goal.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct RdmpState {
+    /// Position, rotation, γ.
+    pub params: [DmpParams; 3],
+    pub tau: [f64; 3],
+    /// Weights of position (3 rows), rotation (3 rows), γ (1 row), [`MAX_BASES`] each.
+    pub weights: Vec<f64>,
+    pub scaled: [bool; 7],
+    pub travel: [f64; 3],
+    pub gamma_goal: f64,
+}
+
+impl RdmpState {
+    pub fn of(r: &Rdmp) -> Self {
+        let (p, o, g) = (&r.position, &r.rotation, &r.gamma);
+        let rows = p
+            .forcing
+            .weights
+            .iter()
+            .chain(&o.forcing.weights)
+            .chain(&g.forcing.weights);
+        let s = |a: &[bool]| a.to_vec();
+        let scaled: Vec<bool> = [
+            s(&p.forcing.scaled),
+            s(&o.forcing.scaled),
+            s(&g.forcing.scaled),
+        ]
+        .concat();
+        RdmpState {
+            params: [p.params, o.params, g.params],
+            tau: [p.tau, o.tau, g.tau],
+            weights: rows.flat_map(|w| w.iter().copied()).collect(),
+            scaled: core::array::from_fn(|i| scaled[i]),
+            travel: [o.travel.x, o.travel.y, o.travel.z],
+            gamma_goal: r.gamma_goal,
+        }
+    }
+
+    /// The RDMP, or None when the weights do not fill exactly seven rows.
+    pub fn rdmp(&self) -> Option<Rdmp> {
+        if self.weights.len() != 7 * MAX_BASES {
+            return None;
+        }
+        let row = |i: usize| -> [f64; MAX_BASES] {
+            core::array::from_fn(|k| self.weights[i * MAX_BASES + k])
+        };
+        let mut r = Rdmp::empty();
+        r.position.params = self.params[0];
+        r.rotation.params = self.params[1];
+        r.gamma.params = self.params[2];
+        r.position.tau = self.tau[0];
+        r.rotation.tau = self.tau[1];
+        r.gamma.tau = self.tau[2];
+        r.position.forcing.weights = [row(0), row(1), row(2)];
+        r.rotation.forcing.weights = [row(3), row(4), row(5)];
+        r.gamma.forcing.weights = [row(6)];
+        r.position.forcing.scaled = [self.scaled[0], self.scaled[1], self.scaled[2]];
+        r.rotation.forcing.scaled = [self.scaled[3], self.scaled[4], self.scaled[5]];
+        r.gamma.forcing.scaled = [self.scaled[6]];
+        r.rotation.travel = nalgebra::Vector3::new(self.travel[0], self.travel[1], self.travel[2]);
+        r.gamma_goal = self.gamma_goal;
+        Some(r)
+    }
+}
+
+/// The file of a learner's state.
+pub(crate) fn encode(state: &LearnerState) -> Vec<u8> {
+    // Plain data of Vecs and numbers: postcard cannot fail on it.
+    let payload = postcard::to_allocvec(state).unwrap_or_default();
+    let mut out = Vec::with_capacity(HEADER + payload.len());
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&crc32(&payload).to_le_bytes());
+    out.extend_from_slice(&payload);
+    out
+}
+
+/// A learner's state from its file.
+pub(crate) fn decode(bytes: &[u8]) -> Result<LearnerState, KbError> {
+    if bytes.len() < HEADER || bytes[..6] != MAGIC {
+        return Err(KbError::Magic);
+    }
+    let u32_at =
+        |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
+    let version = u32_at(6);
+    if version != VERSION {
+        return Err(KbError::Version { found: version });
+    }
+    let mut len = [0u8; 8];
+    len.copy_from_slice(&bytes[10..18]);
+    let expected = HEADER.saturating_add(u64::from_le_bytes(len).min(usize::MAX as u64) as usize);
+    if bytes.len() != expected {
+        return Err(KbError::Truncated {
+            len: bytes.len(),
+            expected,
+        });
+    }
+    let payload = &bytes[HEADER..];
+    let (found, stated) = (crc32(payload), u32_at(18));
+    if found != stated {
+        return Err(KbError::Crc {
+            found,
+            expected: stated,
+        });
+    }
+    postcard::from_bytes(payload).map_err(|e| KbError::Decode(e.to_string()))
+}
+
+use prf_shared::blob::crc32;

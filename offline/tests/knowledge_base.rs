@@ -1,0 +1,195 @@
+//! The knowledge-base file (issue 17, `prf learn --add … --into KB`): learning demonstrations
+//! into a saved learner gives the blob batch learning gives, byte for byte (library and the
+//! real binary), and bad files and unfit datasets are refused with a reason.
+
+mod common;
+
+use common::TempDir;
+use prf_files::dataset::Dataset;
+use prf_learn::kb::KbError;
+use prf_learn::learn::{LearnError, Learner, learn_into};
+use prf_learn::{LearnConfig, compile, learn};
+use prf_shared::robot::RobotModel;
+use prf_sim::demogen::generate_dataset;
+use prf_sim::world::World;
+use std::process::Command;
+use std::sync::OnceLock;
+
+/// Afforded tasks of the example cell: CNC, Printer and Table types, both parts.
+const SELECTION: [usize; 5] = [0, 8, 54, 13, 60];
+
+/// The demonstrations (generated once per test binary).
+fn dataset() -> &'static Dataset {
+    static DS: OnceLock<Dataset> = OnceLock::new();
+    DS.get_or_init(|| {
+        let world = World::example();
+        let all = world.afforded_tasks();
+        let selection: Vec<_> = SELECTION.iter().map(|&i| all[i]).collect();
+        generate_dataset(&world, &selection, 1, 100.0, &|_| {}).expect("dataset")
+    })
+}
+
+/// `ds` with only the demonstrations in `range`.
+fn part(ds: &Dataset, range: std::ops::Range<usize>) -> Dataset {
+    let mut d = ds.clone();
+    d.demonstrations = ds.demonstrations[range].to_vec();
+    d
+}
+
+#[test]
+fn a_saved_learner_adds_demonstrations_as_batch_learning_does() {
+    let ds = dataset();
+    let model = RobotModel::kmr_iiwa14();
+    let cfg = LearnConfig::default();
+    let batch = compile(&learn(ds, &model, &cfg, &|_| {}).unwrap()).unwrap();
+    let mut first = Learner::new(ds, &model, &cfg).unwrap();
+    let k3 = learn_into(&mut first, &ds.demonstrations[..3], &|_| {}).unwrap();
+    let saved = first.save();
+    let mut loaded = Learner::load(&saved).expect("load");
+    assert!(
+        loaded.save() == saved,
+        "save → load → save is the same file"
+    );
+    assert_eq!(
+        compile(&loaded.knowledge(&|_| {})).unwrap(),
+        compile(&k3).unwrap(),
+        "the loaded learner knows what the saved one knew"
+    );
+    let k5 = learn_into(&mut loaded, &ds.demonstrations[3..], &|_| {}).unwrap();
+    assert!(
+        compile(&k5).unwrap() == batch,
+        "3 demonstrations saved, loaded, then 2 added: the batch blob"
+    );
+    assert_eq!(loaded.demonstrations(), 5);
+    let ids: Vec<&str> = loaded.ids().iter().map(|(id, _)| id.as_str()).collect();
+    let expected: Vec<&str> = ds.demonstrations.iter().map(|d| d.id.as_str()).collect();
+    assert_eq!(ids, expected);
+}
+
+#[test]
+fn unfit_datasets_and_bad_files_are_refused_with_a_reason() {
+    let ds = dataset();
+    let model = RobotModel::kmr_iiwa14();
+    let mut l = Learner::new(ds, &model, &LearnConfig::default()).unwrap();
+    learn_into(&mut l, &ds.demonstrations[..2], &|_| {}).unwrap();
+    // The same program again, under any id.
+    let mut again = part(ds, 1..2);
+    again.demonstrations[0].id = "d999".into();
+    let e = l.admits(&again).unwrap_err();
+    assert!(
+        matches!(&e, LearnError::AlreadyAdded { id, as_id } if id == "d999" && as_id == "d001"),
+        "{e}"
+    );
+    // Programs that kept less clearance than the workspaces were dilated for.
+    let mut closer = part(ds, 2..3);
+    closer.clearance_demo = Some(0.04);
+    let e = l.admits(&closer).unwrap_err();
+    assert!(matches!(e, LearnError::ClearanceBelowKb { .. }), "{e}");
+    closer.clearance_demo = None;
+    assert!(matches!(l.admits(&closer), Err(LearnError::NoClearance)));
+    // Another cell.
+    let mut other = part(ds, 2..3);
+    other.locations[0].kind = "Lathe".into();
+    let e = l.admits(&other).unwrap_err();
+    assert!(matches!(e, LearnError::OtherCell { .. }), "{e}");
+    assert!(l.admits(&part(ds, 2..5)).is_ok());
+
+    let good = l.save();
+    let load = |b: &[u8]| Learner::load(b).map(|_| ()).unwrap_err();
+    assert_eq!(load(b"not a knowledge base at all"), KbError::Magic);
+    let mut v = good.clone();
+    v[6] = 9;
+    assert_eq!(load(&v), KbError::Version { found: 9 });
+    assert!(matches!(
+        load(&good[..good.len() - 1]),
+        KbError::Truncated { .. }
+    ));
+    let mut flipped = good.clone();
+    let mid = good.len() / 2;
+    flipped[mid] ^= 0x20;
+    assert!(matches!(load(&flipped), KbError::Crc { .. }));
+    // A payload with a valid checksum that is not a learner.
+    let junk = vec![0xffu8; 64];
+    let mut forged = good[..22].to_vec();
+    forged[10..18].copy_from_slice(&(junk.len() as u64).to_le_bytes());
+    let crc = prf_shared::blob::crc32(&junk);
+    forged[18..22].copy_from_slice(&crc.to_le_bytes());
+    forged.extend_from_slice(&junk);
+    assert!(matches!(load(&forged), KbError::Decode(_)));
+}
+
+/// The real binary: `prf learn A --kb KB`, then `prf learn --add B --into KB` gives the blob
+/// of `prf learn A+B`; adding B again is refused and leaves the knowledge base as it was.
+#[test]
+fn prf_learn_add_into_a_knowledge_base_gives_the_batch_blob() {
+    let ds = dataset();
+    let tmp = TempDir::new("kb");
+    let dir = |n: &str| tmp.path().join(n);
+    part(ds, 0..3).write(&dir("a")).unwrap();
+    part(ds, 3..5).write(&dir("b")).unwrap();
+    ds.write(&dir("all")).unwrap();
+    let prf = |args: &[&std::ffi::OsStr]| {
+        Command::new(env!("CARGO_BIN_EXE_prf"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let os = |p: &std::path::Path| p.as_os_str().to_owned();
+    let ok = |out: std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let (kb, blob, all) = (dir("kb.bin"), dir("ab.blob"), dir("all.blob"));
+    ok(prf(&[
+        "learn".as_ref(),
+        &os(&dir("a")),
+        "--kb".as_ref(),
+        &os(&kb),
+        "-o".as_ref(),
+        &os(&dir("a.blob")),
+        "-q".as_ref(),
+    ]));
+    let said = ok(prf(&[
+        "learn".as_ref(),
+        "--add".as_ref(),
+        &os(&dir("b")),
+        "--into".as_ref(),
+        &os(&kb),
+        "-o".as_ref(),
+        &os(&blob),
+    ]));
+    println!("{said}");
+    assert!(said.contains("added 2 demonstration(s)"), "{said}");
+    ok(prf(&[
+        "learn".as_ref(),
+        &os(&dir("all")),
+        "-o".as_ref(),
+        &os(&all),
+        "-q".as_ref(),
+    ]));
+    assert!(
+        std::fs::read(&blob).unwrap() == std::fs::read(&all).unwrap(),
+        "the batch blob"
+    );
+    let before = std::fs::read(&kb).unwrap();
+    let again = prf(&[
+        "learn".as_ref(),
+        "--add".as_ref(),
+        &os(&dir("b")),
+        "--into".as_ref(),
+        &os(&kb),
+        "-o".as_ref(),
+        &os(&blob),
+    ]);
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(!again.status.success());
+    assert!(err.contains("already in the knowledge base"), "{err}");
+    assert!(
+        std::fs::read(&kb).unwrap() == before,
+        "the knowledge base is unchanged"
+    );
+}
