@@ -8,7 +8,7 @@
 //! spheres they were built from, nor the demonstrated paths that tell equal skills apart.
 //!
 //! File layout: `PRF-KB` magic, format version (u32 LE), payload length (u64 LE), CRC-32
-//! (the blob's, [`prf_shared::blob::crc32`]) of the payload (u32 LE), then the payload: [`LearnerState`] in postcard.
+//! (the blob's, [`prf_shared::blob::crc32`]) of the payload (u32 LE), then the payload: `LearnerState` in postcard.
 
 use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
 use prf_shared::NA;
@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 
 /// The file's first bytes.
 pub const MAGIC: [u8; 6] = *b"PRF-KB";
-/// The layout of [`LearnerState`] this build reads and writes.
+/// The layout of `LearnerState` this build reads and writes.
 pub const VERSION: u32 = 1;
 const HEADER: usize = 6 + 4 + 8 + 4;
 
