@@ -153,15 +153,18 @@ fn prf_learn_add_into_a_knowledge_base_gives_the_batch_blob() {
         &os(&dir("a.blob")),
         "-q".as_ref(),
     ]));
-    let said = ok(prf(&[
-        "learn".as_ref(),
-        "--add".as_ref(),
-        &os(&dir("b")),
-        "--into".as_ref(),
-        &os(&kb),
-        "-o".as_ref(),
-        &os(&blob),
-    ]));
+    let add_b = || {
+        prf(&[
+            "learn".as_ref(),
+            "--add".as_ref(),
+            &os(&dir("b")),
+            "--into".as_ref(),
+            &os(&kb),
+            "-o".as_ref(),
+            &os(&blob),
+        ])
+    };
+    let said = ok(add_b());
     println!("{said}");
     assert!(said.contains("added 2 demonstration(s)"), "{said}");
     ok(prf(&[
@@ -176,15 +179,7 @@ fn prf_learn_add_into_a_knowledge_base_gives_the_batch_blob() {
         "the batch blob"
     );
     let before = std::fs::read(&kb).unwrap();
-    let again = prf(&[
-        "learn".as_ref(),
-        "--add".as_ref(),
-        &os(&dir("b")),
-        "--into".as_ref(),
-        &os(&kb),
-        "-o".as_ref(),
-        &os(&blob),
-    ]);
+    let again = add_b();
     let err = String::from_utf8_lossy(&again.stderr);
     assert!(!again.status.success());
     assert!(err.contains("already in the knowledge base"), "{err}");
