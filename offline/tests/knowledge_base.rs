@@ -94,6 +94,17 @@ fn unfit_datasets_and_bad_files_are_refused_with_a_reason() {
     assert!(matches!(e, LearnError::OtherCell { .. }), "{e}");
     assert!(l.admits(&part(ds, 2..5)).is_ok());
 
+    // Settings that would size a grid beyond memory (the fuzzer's first find: ε = 1e300
+    // overflowed the grid size) are refused when the file is read.
+    let mut huge = part(ds, 0..1);
+    huge.clearance_demo = Some(1e300);
+    let wide = Learner::new(&huge, &model, &LearnConfig::default()).unwrap();
+    let e = Learner::load(&wide.save()).map(|_| ()).unwrap_err();
+    assert_eq!(
+        e,
+        KbError::Decode("a workspace setting out of range".into())
+    );
+
     let good = l.save();
     let load = |b: &[u8]| Learner::load(b).map(|_| ()).unwrap_err();
     assert_eq!(load(b"not a knowledge base at all"), KbError::Magic);

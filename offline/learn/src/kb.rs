@@ -202,7 +202,6 @@ pub(crate) struct SweepState {
     pub seen: Vec<(i32, i32, i32, u8)>,
     pub feature_spacing: f64,
     pub features: Vec<([f64; 3], f64)>,
-    pub kept: Vec<(i64, i64, i64, i64)>,
     pub splat: Option<SplatState>,
 }
 

@@ -180,7 +180,6 @@ impl Sweep {
             seen: sorted(self.seen.iter().copied()),
             feature_spacing: self.feature_spacing,
             features: self.features.iter().map(|(c, r)| (v(c), *r)).collect(),
-            kept: sorted(self.kept.iter().copied()),
             splat: self.splat.as_ref().map(|s| crate::kb::SplatState {
                 origin: v(&s.key.0),
                 dims: s.key.1,
@@ -222,8 +221,13 @@ impl Sweep {
                 .collect(),
             seen: s.seen.into_iter().collect(),
             feature_spacing: s.feature_spacing,
+            // Derived: one key per feature ball (a ball is kept iff its key is new).
+            kept: s
+                .features
+                .iter()
+                .map(|(c, r)| feature_key(&v(*c), *r, s.feature_spacing))
+                .collect(),
             features: s.features.into_iter().map(|(c, r)| (v(c), r)).collect(),
-            kept: s.kept.into_iter().collect(),
             splat: s
                 .splat
                 .filter(|p| {
@@ -258,16 +262,22 @@ impl Sweep {
             if self.seen.insert(key) {
                 let radius = model.spheres[s.sphere as usize].radius;
                 self.spheres.push(SphereSample { centre: p, radius });
-                let k = |v: f64| (v / self.feature_spacing).round() as i64;
                 if self
                     .kept
-                    .insert((k(p.x), k(p.y), k(p.z), (radius * 1e4) as i64))
+                    .insert(feature_key(&p, radius, self.feature_spacing))
                 {
                     self.features.push((p, radius));
                 }
             }
         }
     }
+}
+
+/// The thinning key of a feature ball: its centre on the feature-spacing grid and its radius
+/// in 0.1 mm.
+fn feature_key(p: &Vector3<f64>, radius: f64, spacing: f64) -> (i64, i64, i64, i64) {
+    let k = |v: f64| (v / spacing).round() as i64;
+    (k(p.x), k(p.y), k(p.z), (radius * 1e4) as i64)
 }
 
 /// The items in order (a set written the same way every time).
