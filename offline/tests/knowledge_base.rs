@@ -105,6 +105,18 @@ fn unfit_datasets_and_bad_files_are_refused_with_a_reason() {
         KbError::Decode("a workspace setting out of range".into())
     );
 
+    // A robot sphere of 1e300 m with swept spheres queued (the fuzzer's second find: the next
+    // field build's grid size overflowed) is refused when the file is read.
+    let mut giant = model.clone();
+    giant.spheres[0].radius = 1e300;
+    let mut queued = Learner::new(ds, &giant, &LearnConfig::default()).unwrap();
+    queued.add(&queued.lessons(&ds.demonstrations[0]).unwrap());
+    let e = Learner::load(&queued.save()).map(|_| ()).unwrap_err();
+    assert_eq!(
+        e,
+        KbError::Decode("a robot sphere's radius out of range".into())
+    );
+
     let good = l.save();
     let load = |b: &[u8]| Learner::load(b).map(|_| ()).unwrap_err();
     assert_eq!(load(b"not a knowledge base at all"), KbError::Magic);

@@ -116,6 +116,11 @@ impl RobotState {
         self.spheres.len()
     }
 
+    /// The collision spheres' radii.
+    pub fn radii(&self) -> impl Iterator<Item = f64> + '_ {
+        self.spheres.iter().map(|s| s.2)
+    }
+
     pub fn of(m: &RobotModel) -> Self {
         let v = |x: &Vector3<f64>| [x.x, x.y, x.z];
         RobotState {

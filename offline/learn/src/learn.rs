@@ -747,10 +747,21 @@ impl Learner {
         }
         check_state(&st)?;
         let v = |c: [f64; 3]| nalgebra::Vector3::new(c[0], c[1], c[2]);
+
+        let robot = st.robot.model()?;
         let sweeps: Vec<Sweep> = st.sweeps.into_iter().map(Sweep::from_state).collect();
+        // The grid each type's next build allocates: its feature balls and its queued spheres.
         let nodes = sweeps
             .iter()
-            .map(|s| s.grid_nodes(&st.config.workspace))
+            .zip(&st.pending)
+            .map(|(s, queued)| {
+                let more: Vec<_> = queued
+                    .iter()
+                    .flatten()
+                    .map(|(c, i)| (v(*c), robot.spheres[*i as usize].radius))
+                    .collect();
+                s.grid_nodes(&more, &st.config.workspace)
+            })
             .max()
             .unwrap_or(0);
         if nodes > MAX_GRID_NODES {
@@ -759,7 +770,7 @@ impl Learner {
             )));
         }
         Ok(Learner {
-            robot: st.robot.model()?,
+            robot,
             description: st.description,
             config: st.config,
             clearance_demo: st.clearance_demo,
@@ -843,7 +854,8 @@ const MAX_GRID_NODES: usize = 16 << 20;
 
 /// The numbers of a knowledge base that size what learning allocates or index what it
 /// reads: settings in range (lengths within [0, 1] m, the voxel within [1 mm, 1 m]), swept
-/// spheres finite within 100 m, radii in (0, 1] m, sphere indices of the robot.
+/// spheres finite within 100 m, their and the robot's radii in (0, 1] m, sphere indices of
+/// the robot.
 fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
     let bad = |what: &str| Err(crate::kb::KbError::Decode(format!("{what} out of range")));
     let w = &st.config.workspace;
@@ -867,6 +879,9 @@ fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
         if s.feature_spacing != w.feature_spacing {
             return bad("a sweep's feature spacing");
         }
+    }
+    if !st.robot.radii().all(|r| r > 0.0 && r <= 1.0) {
+        return bad("a robot sphere's radius");
     }
     let spheres = st.robot.spheres();
     let swept = |(c, i): &([f64; 3], u8)| point(c) && (*i as usize) < spheres;

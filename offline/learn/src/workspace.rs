@@ -191,16 +191,18 @@ impl Sweep {
         }
     }
 
-    /// Nodes of the grid a field build of this sweep would allocate with `cfg`.
-    pub(crate) fn grid_nodes(&self, cfg: &WorkspaceConfig) -> usize {
-        if self.features.is_empty() {
-            return 0;
-        }
+    /// Nodes of the grid a field build of this sweep would allocate with `cfg`, once the
+    /// spheres `more` (centre, radius) are added too.
+    pub(crate) fn grid_nodes(&self, more: &[(Vector3<f64>, f64)], cfg: &WorkspaceConfig) -> usize {
         let balls: Vec<(Vector3<f64>, f64)> = self
             .features
             .iter()
+            .chain(more)
             .map(|(c, r)| (*c, r + cfg.epsilon))
             .collect();
+        if balls.is_empty() {
+            return 0;
+        }
         let (_, dims) = grid(&balls, cfg);
         dims.iter().fold(1usize, |n, d| n.saturating_mul(*d))
     }
