@@ -109,6 +109,53 @@ fn every_task_meets_the_budgets_and_matches_the_host_stream() {
     );
 }
 
+/// One SysTick count under `-icount shift=0`, instructions (the firmware calibrates and prints
+/// it; 25 MHz against 1 ns per instruction).
+const SYSTICK_COUNT: i64 = 40;
+
+/// Two runs' outputs agree: every line the same, except that the figures on a line of
+/// instruction counts may differ by one SysTick count. The counter's phase at boot is not
+/// fixed under QEMU's icount: two runs once measured loading as 783,200 and 783,240
+/// instructions, and planning as 145,129,760 and 145,129,720, with the same stream. The
+/// setpoints, the stream's CRC, the blob size, the integration, step, tick and overrun counts
+/// and the RAM figures must match exactly.
+fn assert_same_run(a: &str, b: &str) {
+    let (la, lb): (Vec<&str>, Vec<&str>) = (a.lines().collect(), b.lines().collect());
+    assert_eq!(
+        la.len(),
+        lb.len(),
+        "two runs print different lines:\n{a}\n---\n{b}"
+    );
+    for (x, y) in la.iter().zip(&lb) {
+        if x == y {
+            continue;
+        }
+        let measured = x.contains("instructions") && !x.starts_with("sp ");
+        let (tx, ty): (Vec<&str>, Vec<&str>) = (
+            x.split_whitespace().collect(),
+            y.split_whitespace().collect(),
+        );
+        // Counts of things (blob bytes, integrations, steps, ticks, the worst tick's number,
+        // overruns) are never measurements.
+        let counted = |i: usize| {
+            i > 0
+                && ["blob", "integrations", "steps", "ticks", "(seq", "overruns"]
+                    .contains(&tx[i - 1])
+        };
+        let within_a_count = measured
+            && tx.len() == ty.len()
+            && (0..tx.len()).all(|i| {
+                tx[i] == ty[i]
+                    || !counted(i)
+                        && matches!((tx[i].parse::<i64>(), ty[i].parse::<i64>()), (Ok(m), Ok(n)) if (m - n).abs() <= SYSTICK_COUNT)
+            });
+        assert!(
+            within_a_count,
+            "two runs under -icount shift=0 differ:\n{x}\n{y}"
+        );
+    }
+}
+
 #[test]
 fn runs_are_deterministic_and_the_self_contained_image_runs_alike() {
     let t = FloorTask::new(&World::example(), "Part2", "Printer1", "CNC1").expect("task");
@@ -125,7 +172,7 @@ fn runs_are_deterministic_and_the_self_contained_image_runs_alike() {
     };
     let (a, b) = (flashed(), flashed());
     assert_eq!(a.status, Some(0), "{}", a.stdout);
-    assert_eq!(a.stdout, b.stdout, "two runs under -icount shift=0 differ");
+    assert_same_run(&a.stdout, &b.stdout);
     let image = firmware::image(&blob, &block).expect("image");
     let c = firmware::run(&image, std::iter::empty::<&str>()).expect("run image");
     assert_eq!(c.status, Some(0), "{}", c.stdout);

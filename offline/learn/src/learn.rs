@@ -542,12 +542,6 @@ impl Learner {
         &self.ids
     }
 
-    /// The location and part type names the learner knows (a demonstration of another type
-    /// cannot be added).
-    pub fn kinds(&self) -> (&[String], &[String]) {
-        (&self.location_kinds, &self.part_kinds)
-    }
-
     /// The robot model learned for.
     pub fn robot(&self) -> &RobotModel {
         &self.robot
@@ -555,7 +549,8 @@ impl Learner {
 
     /// Whether `ds`'s demonstrations may be added: the same cell (location and part types),
     /// a stated r_d at least the one learned with (programs that kept less clearance would
-    /// make ε unsafe), and no demonstration id already added.
+    /// make ε unsafe), and no program already added (by [`fingerprint`]: ids repeat across
+    /// datasets).
     pub fn admits(&self, ds: &Dataset) -> Result<(), LearnError> {
         let (locations, parts) = (location_kinds(ds), part_kinds(ds));
         if locations != self.location_kinds || parts != self.part_kinds {
