@@ -54,7 +54,18 @@ impl RiskAccumulator {
     ) -> f64 {
         let mut centres = [Vector3::zeros(); MAX_SPHERES];
         kin.sphere_centres_in(model, arm_base, &mut centres);
-        for ((s, p), hint) in model.spheres.iter().zip(&centres).zip(&mut self.hints) {
+        self.add_centres(model, field, &centres)
+    }
+
+    /// [`RiskAccumulator::add`] on a configuration's sphere centres in the field's frame
+    /// ([`ArmKinematics::sphere_centres_in`], one per sphere of `model`).
+    pub fn add_centres(
+        &mut self,
+        model: &RobotModel,
+        field: &impl DistanceField,
+        centres: &[Vector3<f64>],
+    ) -> f64 {
+        for ((s, p), hint) in model.spheres.iter().zip(centres).zip(&mut self.hints) {
             let level = eta(self.excess);
             let stop = level - s.radius;
             let d = field.distance_upto(p, stop, hint);

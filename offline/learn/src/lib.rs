@@ -4,7 +4,7 @@
 //!   [`prf_shared::motion::CLASSES`];
 //! - [`kb`]: the knowledge base, a learner's whole state on disk, for `prf learn --add`;
 //! - [`affordance`]: stances and grasps with tolerance;
-//! - [`workspace`] (+ [`edt`]): Ω+ per location type as a conservative distance field;
+//! - [`workspace`] (+ [`edt`], [`certify`]): Ω+ per location type as a conservative distance field;
 //! - [`skills`]: TrainRDMP on arm motions, the skill sets and share();
 //! - [`compile`](mod@compile): Learn's output → the blob ([`prf_shared::blob`]);
 //! - [`report`](mod@report): a blob's contents and sizes, as `prf learn` and `prf inspect` print them.
@@ -13,6 +13,7 @@
 //! simulator, iceoryx2, Ruckig or terminal crate.
 
 pub mod affordance;
+pub mod certify;
 pub mod compile;
 pub mod edt;
 pub mod kb;

@@ -13,20 +13,21 @@
 //!    ([`crate::edt`]) to the nearest node inside Ω+, an upper bound of their distance.
 //! 4. **Encoding**: bricks far outside become uniform; feature balls are quantized
 //!    conservatively (offset rounded, radius shrunk by the rounding error).
-//! 5. **Certificates**: every demonstrated sphere that the encoded field does not certify
-//!    with margin [`WorkspaceConfig::certify_margin`] gets its own ball as a certificate in
-//!    the cells around it, so every demonstrated configuration has risk 0.
+//! 5. **Certificates** ([`crate::certify`]): every demonstrated sphere that the encoded field
+//!    does not certify with margin [`WorkspaceConfig::certify_margin`] gets its own ball as a
+//!    certificate in the cells around it, so every demonstrated configuration has risk 0.
 
+use crate::certify::{self, Certified};
 use crate::edt;
 use nalgebra::Vector3;
 use prf_shared::JointVector;
 use prf_shared::field::{
-    BRICK, BRICK_NODES, CERT_BYTES, Field, FieldData, Hint, MM, NODE_BYTES, OFFSET_UNIT, UNIFORM,
+    BRICK, BRICK_NODES, Field, FieldData, MM, NODE_BYTES, OFFSET_UNIT, UNIFORM,
 };
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
-use std::collections::HashSet;
+use rustc_hash::FxHashSet as HashSet;
 
 /// Settings of workspace learning.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -92,6 +93,8 @@ pub struct Sweep {
     kept: HashSet<(i64, i64, i64, i64)>,
     /// The last field build's splat, continued by the next one.
     splat: Option<Splat>,
+    /// The last field build's certificate decisions, continued by the next one.
+    certified: Option<Certified>,
 }
 
 impl Default for Sweep {
@@ -106,11 +109,12 @@ impl Sweep {
     pub fn new(feature_spacing: f64) -> Self {
         Sweep {
             spheres: Vec::new(),
-            seen: HashSet::new(),
+            seen: HashSet::default(),
             feature_spacing,
             features: Vec::new(),
-            kept: HashSet::new(),
+            kept: HashSet::default(),
             splat: None,
+            certified: None,
         }
     }
 
@@ -247,6 +251,8 @@ impl Sweep {
                     feature: p.feature,
                     done: p.done,
                 }),
+            // A cache the file does not keep: the next build decides every cell.
+            certified: None,
         }
     }
 
@@ -438,7 +444,7 @@ pub fn build_field(sweep: &mut Sweep, cfg: &WorkspaceConfig) -> Option<LearnedFi
     let bdims = dims.map(|n| n / BRICK);
     let mut bricks = Vec::with_capacity(2 * bdims.iter().product::<usize>());
     let mut nodes = Vec::new();
-    let mut used = HashSet::new();
+    let mut used = HashSet::default();
     let max_mm = (UNIFORM - 1) as f64;
     for bi in 0..bdims[0] {
         for bj in 0..bdims[1] {
@@ -486,7 +492,10 @@ pub fn build_field(sweep: &mut Sweep, cfg: &WorkspaceConfig) -> Option<LearnedFi
         spheres: sweep.spheres.len(),
         feature_balls: used.len(),
     };
-    learned.certificates = certificates(&learned, sweep, cfg);
+    let (records, certified) =
+        certify::certificates(&learned, &sweep.spheres, sweep.certified.take(), cfg);
+    learned.certificates = records;
+    sweep.certified = Some(certified);
     Some(learned)
 }
 
@@ -512,73 +521,4 @@ fn encode_node(v: &Vector3<f64>, value: f64, ball: Option<(Vector3<f64>, f64)>) 
     let mm = (value / MM).ceil().clamp(i16::MIN as f64, i16::MAX as f64) as i16;
     let b = mm.to_le_bytes();
     [b[0], b[1], 0, 0]
-}
-
-/// Step 5: certificate balls for the demonstrated spheres the field does not certify.
-///
-/// Within one cell the lookup is a minimum of 1-Lipschitz terms, so a sphere whose centre c
-/// satisfies (terms of cell C at c) + r ≤ −m is certified for every centre within m of c in
-/// C. Each cell the margin ball around c touches is checked; where it fails, the sphere's own
-/// ball B(c, r + ε) becomes a certificate of that cell.
-fn certificates(learned: &LearnedField, sweep: &Sweep, cfg: &WorkspaceConfig) -> Vec<u8> {
-    let field = learned.field();
-    let [nx, ny, nz] = field.dims();
-    // Certificate balls per cell, indexed by cell.
-    let mut extra: Vec<Vec<(Vector3<f64>, f64)>> = vec![Vec::new(); (nx - 1) * (ny - 1) * (nz - 1)];
-    let m = cfg.certify_margin;
-    let mut hint = Hint::default();
-    for s in &sweep.spheres {
-        // The cells the margin ball touches: those of its box's corners (per axis the cell
-        // of the lowest and of the highest corner, and every cell between).
-        let (a, b) = (
-            field.cell_at(&(s.centre - Vector3::repeat(m))),
-            field.cell_at(&(s.centre + Vector3::repeat(m))),
-        );
-        let mut cells = [[0usize; 3]; 8];
-        let mut n = 0;
-        for i in a[0]..=b[0] {
-            for j in a[1]..=b[1] {
-                for k in a[2]..=b[2] {
-                    if n < cells.len() {
-                        cells[n] = [i, j, k];
-                        n += 1;
-                    }
-                }
-            }
-        }
-        // Its own ball, quantized to mm with the radius shrunk by the rounding error.
-        let q = s.centre.map(|v| (v / MM).round() * MM);
-        let r = (((s.radius + cfg.epsilon) - (q - s.centre).norm()) / MM).floor() * MM;
-        let certified = |d: f64| d + s.radius <= -m;
-        for &cell in &cells[..n] {
-            let key = field.cell_index(cell) as usize;
-            // The lookup may stop at the first term that certifies the sphere.
-            let mut d = field.distance_in_cell_upto(cell, &s.centre, -m - s.radius, &mut hint);
-            if !certified(d) {
-                d = field.distance_in_cell(cell, &s.centre);
-            }
-            for (c, rr) in &extra[key] {
-                if certified(d) {
-                    break;
-                }
-                d = d.min((s.centre - c).norm() - rr);
-            }
-            if !certified(d) {
-                extra[key].push((q, r));
-            }
-        }
-    }
-    let mut out = Vec::new();
-    for (cell, list) in extra.iter().enumerate() {
-        let cell = cell as u32;
-        for (c, r) in list {
-            out.extend_from_slice(&cell.to_le_bytes());
-            for v in c.iter() {
-                out.extend_from_slice(&(((v / MM).round()) as i16).to_le_bytes());
-            }
-            out.extend_from_slice(&((r / MM).round() as u16).to_le_bytes());
-        }
-    }
-    debug_assert_eq!(out.len() % CERT_BYTES, 0);
-    out
 }

@@ -6,6 +6,7 @@ use super::TypeState;
 use anyhow::{Result, anyhow};
 use prf_runtime::Runtime;
 use prf_runtime::skill_plan::{Evaluation, Side, evaluate_arm_motion_observed};
+use prf_shared::field::Field;
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::rdmp::Rdmp;
 use prf_shared::risk::RiskAccumulator;
@@ -69,6 +70,38 @@ pub struct Shared {
     stream_bytes: Mutex<usize>,
 }
 
+/// A set of lookup cells of one field, as bits.
+struct CellSet(Vec<u64>);
+
+impl CellSet {
+    /// The empty set over the cells of `field`.
+    fn new(field: &Field<'_>) -> Self {
+        let [nx, ny, nz] = field.dims();
+        CellSet(vec![0; ((nx - 1) * (ny - 1) * (nz - 1)).div_ceil(64)])
+    }
+
+    /// Adds the cells of the points `centres` (field frame).
+    fn insert(&mut self, field: &Field<'_>, centres: &[nalgebra::Vector3<f64>]) {
+        for c in centres {
+            let i = field.cell_index(field.cell_at(c)) as usize;
+            self.0[i / 64] |= 1 << (i % 64);
+        }
+    }
+
+    /// The cells, ascending.
+    fn sorted(&self) -> Vec<u32> {
+        let mut out = Vec::new();
+        for (w, &bits) in self.0.iter().enumerate() {
+            let mut b = bits;
+            while b != 0 {
+                out.push((w * 64) as u32 + b.trailing_zeros());
+                b &= b - 1;
+            }
+        }
+        out
+    }
+}
+
 /// At most this many probes per candidate.
 const MAX_PROBES: usize = 8;
 /// At most this many bytes of streams are kept across episodes.
@@ -109,33 +142,40 @@ impl At<'_, '_> {
     }
 
     /// Risk of a stream in the side's field, stopping once it exceeds `threshold` (then the
-    /// first configuration that did is returned too).
-    fn rate(&self, stream: &[ArmKinematics], threshold: f64) -> (f64, Option<ArmKinematics>) {
+    /// first configuration that did is returned); within it, the sorted cells its spheres are
+    /// looked up in ([`At::cells`]), from the same centres.
+    fn rate(
+        &self,
+        stream: &[ArmKinematics],
+        threshold: f64,
+    ) -> Result<Vec<u32>, Box<ArmKinematics>> {
+        let (model, field) = (&self.rt.model, &self.side.field);
         let base = &self.side.arm_bases[self.s];
         let mut acc = RiskAccumulator::default();
+        let mut cells = CellSet::new(field);
+        let mut centres = [nalgebra::Vector3::zeros(); MAX_SPHERES];
         for kin in stream {
-            if acc.add(&self.rt.model, &self.side.field, base, kin) > threshold {
-                return (acc.risk(), Some(*kin));
+            kin.sphere_centres_in(model, base, &mut centres);
+            let centres = &centres[..model.spheres.len()];
+            if acc.add_centres(model, field, centres) > threshold {
+                return Err(Box::new(*kin));
             }
+            cells.insert(field, centres);
         }
-        (acc.risk(), None)
+        Ok(cells.sorted())
     }
 
     /// The sorted cells the spheres of `stream` are looked up in.
     fn cells(&self, stream: &[ArmKinematics]) -> Vec<u32> {
-        let model = &self.rt.model;
+        let (model, field) = (&self.rt.model, &self.side.field);
         let base = &self.side.arm_bases[self.s];
+        let mut cells = CellSet::new(field);
         let mut centres = [nalgebra::Vector3::zeros(); MAX_SPHERES];
-        let mut cells = Vec::new();
         for kin in stream {
             kin.sphere_centres_in(model, base, &mut centres);
-            for c in &centres[..model.spheres.len()] {
-                cells.push(self.side.field.cell_index(self.side.field.cell_at(c)));
-            }
+            cells.insert(field, &centres[..model.spheres.len()]);
         }
-        cells.sort_unstable();
-        cells.dedup();
-        cells
+        cells.sorted()
     }
 
     /// Whether RDMP `r` is a witness, using and extending what `shared` knows of it; Ok(stream)
@@ -169,14 +209,14 @@ impl At<'_, '_> {
         }
         if let Some(stream) = stream {
             return Ok(match self.rate(&stream, threshold) {
-                (_, None) => Ok(stream),
-                (_, Some(kin)) => {
+                Ok(_) => Ok(stream),
+                Err(kin) => {
                     if let Some(k) = lock()?.get_mut(&key)
                         && k.probes.len() < MAX_PROBES
                     {
-                        k.probes.push(kin);
+                        k.probes.push(*kin);
                     }
-                    Err(Rejection::Above(Box::new(kin)))
+                    Err(Rejection::Above(kin))
                 }
             });
         }
@@ -282,14 +322,11 @@ pub fn side_feasible(
                 state.witness = Some(w);
             } else {
                 match at.rate(&w.stream, threshold) {
-                    (_, None) => {
-                        let cells = at.cells(&w.stream);
+                    Ok(cells) => {
                         state.witness = Some(Witness { cells, ..w });
                     }
-                    (_, Some(kin)) => {
-                        state
-                            .rejected
-                            .insert(w.rdmp, Rejection::Above(Box::new(kin)));
+                    Err(kin) => {
+                        state.rejected.insert(w.rdmp, Rejection::Above(kin));
                         state.confirmed.insert(w.rdmp);
                     }
                 }

@@ -1,0 +1,233 @@
+//! Step 5 of [`crate::workspace`]: certificate balls for the demonstrated spheres the encoded
+//! field does not certify, continued across field builds of a growing sweep.
+//!
+//! Within one cell the lookup is a minimum of 1-Lipschitz terms (its 8 corner nodes), so a
+//! sphere whose centre c satisfies (terms of cell C at c) + r ≤ −m is certified for every
+//! centre within m of c in C. Each cell the margin ball around c touches is checked; where
+//! it fails, the sphere's own ball B(c, r + ε) becomes a certificate of that cell.
+//!
+//! A cell's certificates depend only on its corner nodes and on the spheres touching it, in
+//! order. So the next build of a sweep ([`Certified`]) re-decides only the cells one of whose
+//! corners is encoded differently, and the spheres added since: the result is the same bytes
+//! a build from nothing gives.
+
+use crate::workspace::{LearnedField, SphereSample, WorkspaceConfig};
+use nalgebra::Vector3;
+use prf_shared::field::{BRICK, BRICK_NODES, CERT_BYTES, Field, Hint, MM, NODE_BYTES, UNIFORM};
+
+/// How a node is encoded: its brick's uniform value (true), or its own bytes (false).
+pub type NodeToken = (bool, [u8; NODE_BYTES]);
+
+impl LearnedField {
+    /// Every node's encoding, in node order ((i · ny + j) · nz + k).
+    pub fn node_tokens(&self) -> Vec<NodeToken> {
+        let [nx, ny, nz] = self.dims.map(|d| d as usize);
+        let (by, bz) = (ny / BRICK, nz / BRICK);
+        let mut out = Vec::with_capacity(nx * ny * nz);
+        for i in 0..nx {
+            for j in 0..ny {
+                for k in 0..nz {
+                    let b = ((i / BRICK) * by + j / BRICK) * bz + k / BRICK;
+                    let v = u16::from_le_bytes([self.bricks[2 * b], self.bricks[2 * b + 1]]);
+                    out.push(if v >= UNIFORM {
+                        let [a, c] = v.to_le_bytes();
+                        (true, [a, c, 0, 0])
+                    } else {
+                        let local = ((i % BRICK) * BRICK + j % BRICK) * BRICK + k % BRICK;
+                        let at = (v as usize * BRICK_NODES + local) * NODE_BYTES;
+                        (false, core::array::from_fn(|n| self.nodes[at + n]))
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// The grid: origin, voxel and node counts.
+    pub fn grid(&self) -> ([f32; 3], f32, [u16; 3]) {
+        (self.origin, self.voxel, self.dims)
+    }
+}
+
+/// Per lookup cell of a grid with node counts `dims`, whether one of its 8 corners is encoded
+/// differently in `old` and `new` (node tokens of the same grid).
+pub fn cells_with_changed_corners(
+    dims: [u16; 3],
+    old: &[NodeToken],
+    new: &[NodeToken],
+) -> Vec<bool> {
+    let [nx, ny, nz] = dims.map(|d| d as usize);
+    let node = |i: usize, j: usize, k: usize| (i * ny + j) * nz + k;
+    let changed: Vec<bool> = old.iter().zip(new).map(|(a, b)| a != b).collect();
+    let mut out = Vec::with_capacity((nx - 1) * (ny - 1) * (nz - 1));
+    for i in 0..nx - 1 {
+        for j in 0..ny - 1 {
+            for k in 0..nz - 1 {
+                out.push(
+                    (0..8).any(|d| changed[node(i + (d >> 2 & 1), j + (d >> 1 & 1), k + (d & 1))]),
+                );
+            }
+        }
+    }
+    out
+}
+
+/// The certificate decisions of a sweep's last field build, continued by the next one.
+#[derive(Clone, Debug)]
+pub struct Certified {
+    /// The grid the decisions were made on and every node's encoding there.
+    grid: ([f32; 3], f32, [u16; 3]),
+    tokens: Vec<NodeToken>,
+    /// Per cell: the spheres (indices, ascending) whose margin ball touches it, and its
+    /// certificate balls (mm-quantized centre, radius).
+    spheres: Vec<Vec<u32>>,
+    balls: Vec<Vec<(Vector3<f64>, f64)>>,
+    /// Spheres decided (a prefix of the sweep's, which only grows).
+    done: usize,
+    /// Margin and ε the decisions were made with.
+    settings: (f64, f64),
+}
+
+/// The certificate records (cell, centre and radius in mm) of `learned`, whose certificates
+/// must still be empty, for the demonstrated `spheres`; `last` is what the previous build of
+/// the same sweep decided (its spheres a prefix of these), or None. Returns the records and
+/// what this build decided, for the next.
+pub fn certificates(
+    learned: &LearnedField,
+    spheres: &[SphereSample],
+    last: Option<Certified>,
+    cfg: &WorkspaceConfig,
+) -> (Vec<u8>, Certified) {
+    debug_assert!(learned.certificates.is_empty());
+    let field = learned.field();
+    let [nx, ny, nz] = field.dims();
+    let n_cells = (nx - 1) * (ny - 1) * (nz - 1);
+    let tokens = learned.node_tokens();
+    let settings = (cfg.certify_margin, cfg.epsilon);
+    let mut c = match last {
+        Some(c)
+            if c.grid == learned.grid() && c.settings == settings && c.done <= spheres.len() =>
+        {
+            c
+        }
+        _ => Certified {
+            grid: learned.grid(),
+            tokens: Vec::new(),
+            spheres: vec![Vec::new(); n_cells],
+            balls: vec![Vec::new(); n_cells],
+            done: 0,
+            settings,
+        },
+    };
+    let mut decide = Decide {
+        field,
+        cfg,
+        hint: Hint::default(),
+    };
+    // The cells one of whose corners changed: every sphere touching them decided anew.
+    if c.done > 0 {
+        let redo = cells_with_changed_corners(learned.dims, &c.tokens, &tokens);
+        for (cell, redo) in redo.iter().enumerate() {
+            if *redo {
+                c.balls[cell].clear();
+                for &i in &c.spheres[cell] {
+                    decide.sphere_in_cell(&spheres[i as usize], cell, &mut c.balls[cell]);
+                }
+            }
+        }
+    }
+    // The spheres added since, in every cell they touch.
+    for (i, s) in spheres.iter().enumerate().skip(c.done) {
+        for cell in decide.cells_touched(s) {
+            c.spheres[cell].push(i as u32);
+            decide.sphere_in_cell(s, cell, &mut c.balls[cell]);
+        }
+    }
+    c.done = spheres.len();
+    c.tokens = tokens;
+    let mut out = Vec::new();
+    for (cell, list) in c.balls.iter().enumerate() {
+        let cell = cell as u32;
+        for (c, r) in list {
+            out.extend_from_slice(&cell.to_le_bytes());
+            for v in c.iter() {
+                out.extend_from_slice(&(((v / MM).round()) as i16).to_le_bytes());
+            }
+            out.extend_from_slice(&((r / MM).round() as u16).to_le_bytes());
+        }
+    }
+    debug_assert_eq!(out.len() % CERT_BYTES, 0);
+    (out, c)
+}
+
+/// The decision for one sphere in one cell, on an encoded field without certificates.
+struct Decide<'a> {
+    field: Field<'a>,
+    cfg: &'a WorkspaceConfig,
+    hint: Hint,
+}
+
+impl Decide<'_> {
+    /// Cell (i, j, k) of a cell index ([`Field::cell_index`]).
+    fn cell(&self, index: usize) -> [usize; 3] {
+        let [_, ny, nz] = self.field.dims().map(|n| n - 1);
+        [index / (ny * nz), (index / nz) % ny, index % nz]
+    }
+
+    /// The cells (indices) the margin ball of `s` touches: those of its box's corners (per
+    /// axis the cell of the lowest and of the highest corner, and every cell between), at
+    /// most 8.
+    fn cells_touched(&self, s: &SphereSample) -> impl Iterator<Item = usize> + use<> {
+        let m = Vector3::repeat(self.cfg.certify_margin);
+        let (a, b) = (
+            self.field.cell_at(&(s.centre - m)),
+            self.field.cell_at(&(s.centre + m)),
+        );
+        let mut cells = [0usize; 8];
+        let mut n = 0;
+        for i in a[0]..=b[0] {
+            for j in a[1]..=b[1] {
+                for k in a[2]..=b[2] {
+                    if n < cells.len() {
+                        cells[n] = self.field.cell_index([i, j, k]) as usize;
+                        n += 1;
+                    }
+                }
+            }
+        }
+        cells.into_iter().take(n)
+    }
+
+    /// Decides sphere `s` in cell `cell` after the certificate balls `balls` of the spheres
+    /// before it: certified by the cell's terms or one of those balls with the margin, or
+    /// its own ball B(c, r + ε) — mm-quantized, the radius shrunk by the rounding error — is
+    /// added.
+    fn sphere_in_cell(
+        &mut self,
+        s: &SphereSample,
+        cell: usize,
+        balls: &mut Vec<(Vector3<f64>, f64)>,
+    ) {
+        let m = self.cfg.certify_margin;
+        let certified = |d: f64| d + s.radius <= -m;
+        let c = self.cell(cell);
+        // The lookup may stop at the first term that certifies the sphere.
+        let mut d = self
+            .field
+            .distance_in_cell_upto(c, &s.centre, -m - s.radius, &mut self.hint);
+        if !certified(d) {
+            d = self.field.distance_in_cell(c, &s.centre);
+        }
+        for (c, rr) in balls.iter() {
+            if certified(d) {
+                return;
+            }
+            d = d.min((s.centre - c).norm() - rr);
+        }
+        if !certified(d) {
+            let q = s.centre.map(|v| (v / MM).round() * MM);
+            let r = (((s.radius + self.cfg.epsilon) - (q - s.centre).norm()) / MM).floor() * MM;
+            balls.push((q, r));
+        }
+    }
+}
