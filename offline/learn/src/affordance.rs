@@ -1,14 +1,14 @@
 //! Affordance sets (Alg. 3, line 9): relative poses T_{f_r}^{f_a}, de-duplicated with a
 //! tolerance (repeated programs reach the same stance and grasp up to log rounding).
 
-use prf_shared::se3::{Pose, log};
+use prf_shared::se3::{Pose, log, pose_from_array, pose_to_array};
 
 /// Two affordances closer than this in translation (m) and rotation (rad) are one.
 pub const TRANSLATION_TOL: f64 = 1e-3;
 pub const ROTATION_TOL: f64 = 2e-3;
 
-/// A set of poses with tolerance; keeps the first pose seen of each cluster and counts how
-/// often each was demonstrated.
+/// A set of poses with tolerance; keeps the first pose seen of each cluster ([`quantized`])
+/// and counts how often each was demonstrated.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AffordanceSet {
     pub poses: Vec<Pose>,
@@ -16,8 +16,9 @@ pub struct AffordanceSet {
 }
 
 impl AffordanceSet {
-    /// Adds `p` (or counts it if an equal one is present); returns its index.
+    /// Adds `p`, quantized (or counts it if an equal one is present); returns its index.
     pub fn insert(&mut self, p: Pose) -> usize {
+        let p = quantized(&p);
         if let Some(i) = self.find(&p) {
             self.counts[i] += 1;
             return i;
@@ -39,6 +40,18 @@ impl AffordanceSet {
     pub fn is_empty(&self) -> bool {
         self.poses.is_empty()
     }
+}
+
+/// The step affordance poses are kept to: metres of translation, and per component of the
+/// unit quaternion. Far below the tolerances, it makes programs that reach the same stance
+/// or grasp up to log rounding give the same bits.
+pub const QUANTUM: f64 = 1e-6;
+
+/// `p` with its translation and quaternion rounded to [`QUANTUM`] (the quaternion then
+/// normalized).
+pub fn quantized(p: &Pose) -> Pose {
+    // + 0.0: −0 and +0 are one value.
+    pose_from_array(pose_to_array(p).map(|v| (v / QUANTUM).round() * QUANTUM + 0.0)).unwrap_or(*p)
 }
 
 /// True if `a` and `b` are equal within the tolerances.

@@ -24,7 +24,9 @@
 //!   field change;
 //! - failing, missing the goal or being too fast holds in every field.
 //!
-//! Across episodes the same is shared per exact (RDMP, goal, arm base) ([`Shared`]). Nothing
+//! Across episodes the same is shared per exact (RDMP, goal, arm base) ([`Shared`]); the
+//! learned stances and grasps are quantized ([`prf_learn::affordance::quantized`]), so a
+//! candidate has the same bits whatever the order of the episode. Nothing
 //! assumes the field grows monotonically (the encoded field does not, exactly); the
 //! from-scratch count ([`Setup::from_scratch`]) decides everything anew.
 
