@@ -27,7 +27,7 @@ use prf_shared::field::{
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
-use rustc_hash::FxHashSet as HashSet;
+use std::collections::HashSet;
 
 /// Settings of workspace learning.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -109,10 +109,10 @@ impl Sweep {
     pub fn new(feature_spacing: f64) -> Self {
         Sweep {
             spheres: Vec::new(),
-            seen: HashSet::default(),
+            seen: HashSet::new(),
             feature_spacing,
             features: Vec::new(),
-            kept: HashSet::default(),
+            kept: HashSet::new(),
             splat: None,
             certified: None,
         }
@@ -444,7 +444,7 @@ pub fn build_field(sweep: &mut Sweep, cfg: &WorkspaceConfig) -> Option<LearnedFi
     let bdims = dims.map(|n| n / BRICK);
     let mut bricks = Vec::with_capacity(2 * bdims.iter().product::<usize>());
     let mut nodes = Vec::new();
-    let mut used = HashSet::default();
+    let mut used = HashSet::new();
     let max_mm = (UNIFORM - 1) as f64;
     for bi in 0..bdims[0] {
         for bj in 0..bdims[1] {

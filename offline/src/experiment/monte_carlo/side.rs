@@ -141,6 +141,24 @@ impl At<'_, '_> {
         RiskAccumulator::default().add(&self.rt.model, &self.side.field, base, kin)
     }
 
+    /// Calls `f` with each configuration of `stream` and its sphere centres in the side's
+    /// field frame, while it returns true.
+    fn each_centres(
+        &self,
+        stream: &[ArmKinematics],
+        mut f: impl FnMut(&ArmKinematics, &[nalgebra::Vector3<f64>]) -> bool,
+    ) {
+        let model = &self.rt.model;
+        let base = &self.side.arm_bases[self.s];
+        let mut centres = [nalgebra::Vector3::zeros(); MAX_SPHERES];
+        for kin in stream {
+            kin.sphere_centres_in(model, base, &mut centres);
+            if !f(kin, &centres[..model.spheres.len()]) {
+                return;
+            }
+        }
+    }
+
     /// Risk of a stream in the side's field, stopping once it exceeds `threshold` (then the
     /// first configuration that did is returned); within it, the sorted cells its spheres are
     /// looked up in ([`At::cells`]), from the same centres.
@@ -150,31 +168,28 @@ impl At<'_, '_> {
         threshold: f64,
     ) -> Result<Vec<u32>, Box<ArmKinematics>> {
         let (model, field) = (&self.rt.model, &self.side.field);
-        let base = &self.side.arm_bases[self.s];
         let mut acc = RiskAccumulator::default();
         let mut cells = CellSet::new(field);
-        let mut centres = [nalgebra::Vector3::zeros(); MAX_SPHERES];
-        for kin in stream {
-            kin.sphere_centres_in(model, base, &mut centres);
-            let centres = &centres[..model.spheres.len()];
+        let mut above = None;
+        self.each_centres(stream, |kin, centres| {
             if acc.add_centres(model, field, centres) > threshold {
-                return Err(Box::new(*kin));
+                above = Some(Box::new(*kin));
+                return false;
             }
             cells.insert(field, centres);
-        }
-        Ok(cells.sorted())
+            true
+        });
+        above.map_or_else(|| Ok(cells.sorted()), Err)
     }
 
     /// The sorted cells the spheres of `stream` are looked up in.
     fn cells(&self, stream: &[ArmKinematics]) -> Vec<u32> {
-        let (model, field) = (&self.rt.model, &self.side.field);
-        let base = &self.side.arm_bases[self.s];
+        let field = &self.side.field;
         let mut cells = CellSet::new(field);
-        let mut centres = [nalgebra::Vector3::zeros(); MAX_SPHERES];
-        for kin in stream {
-            kin.sphere_centres_in(model, base, &mut centres);
-            cells.insert(field, &centres[..model.spheres.len()]);
-        }
+        self.each_centres(stream, |_, centres| {
+            cells.insert(field, centres);
+            true
+        });
         cells.sorted()
     }
 
