@@ -27,10 +27,10 @@ use crate::executor::{ExecutorConfig, Measured, planar, wrap};
 use crate::load::{LoadError, Runtime};
 use crate::plan::Plan;
 use crate::program::{Program, ProgramError, Segment};
-use crate::skill_plan::{PttClasses, PttSides, SkillPlanError};
+use crate::skill_plan::{PttClasses, PttSides, SkillPlanError, trace_rdmp};
 use crate::task::Task;
 use prf_shared::kinematics::ArmKinematics;
-use prf_shared::rdmp::{RdmpError, RdmpRun};
+use prf_shared::rdmp::RdmpError;
 use prf_shared::risk::RiskAccumulator;
 use prf_shared::se3::Pose;
 use prf_shared::{JointVector, NA};
@@ -217,35 +217,29 @@ fn nearest_on_path(
     else {
         return Err(RecoverError::NoProgram);
     };
-    let (model, cfg) = (&rt.model, &rt.config.rdmp);
     let rdmp = rt
         .skill_rdmp(skill as usize)
         .map_err(RecoverError::Load)?
-        .ok_or(RecoverError::NoProgram)?
-        .time_scaled(scale);
-    let q0 = JointVector::from(model.home);
-    let mut run = RdmpRun::new(model, &rdmp, &q0, &goal, cfg).map_err(RecoverError::Rdmp)?;
-    run.set_steps(steps as usize);
+        .ok_or(RecoverError::NoProgram)?;
     let mut best = Nearest {
         step: 0,
-        gap: gap(&model.home, q),
-        q: model.home,
+        gap: f64::INFINITY,
+        q: rt.model.home,
     };
-    while !run.finished() {
-        let qk: [f64; NA] = run
-            .step(model, &rdmp, cfg)
-            .map_err(RecoverError::Rdmp)?
-            .q
-            .into();
+    let mut step = 0;
+    trace_rdmp(rt, &rdmp, &goal, scale, steps, |qk| {
+        let qk: [f64; NA] = (*qk).into();
         let d = gap(&qk, q);
         if d < best.gap {
             best = Nearest {
-                step: run.progress().0 as u32,
+                step,
                 gap: d,
                 q: qk,
             };
         }
-    }
+        step += 1;
+    })
+    .map_err(RecoverError::Rdmp)?;
     Ok(best)
 }
 

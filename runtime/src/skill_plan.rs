@@ -344,13 +344,26 @@ pub fn trace_arm_motion(
     rdmp: &Rdmp,
     goal: &Pose,
     timing: &ArmTiming,
+    visit: impl FnMut(&JointVector),
+) -> Result<(), RdmpError> {
+    trace_rdmp(rt, rdmp, goal, timing.scale, timing.steps, visit)
+}
+
+/// The configurations of `rdmp` time-scaled by `scale`, run from q_a,H to `goal` for
+/// `steps` steps, q_a,H first: what the executor emits for an Arm segment.
+pub fn trace_rdmp(
+    rt: &Runtime<'_>,
+    rdmp: &Rdmp,
+    goal: &Pose,
+    scale: f64,
+    steps: u32,
     mut visit: impl FnMut(&JointVector),
 ) -> Result<(), RdmpError> {
     let (model, cfg) = (&rt.model, &rt.config.rdmp);
-    let rdmp = rdmp.time_scaled(timing.scale);
+    let rdmp = rdmp.time_scaled(scale);
     let q0 = JointVector::from(model.home);
     let mut run = RdmpRun::new(model, &rdmp, &q0, goal, cfg)?;
-    run.set_steps(timing.steps as usize);
+    run.set_steps(steps as usize);
     visit(&q0);
     while !run.finished() {
         visit(&run.step(model, &rdmp, cfg)?.q);
