@@ -424,9 +424,9 @@ impl RdmpRun {
     }
 
     /// Sets the number of steps of the whole motion to `n` (at least the steps already taken):
-    /// beyond τ the phase keeps decaying, the forcing term vanishes and the DMPs settle on
-    /// their goals (Eq. 1 with f → 0, critically damped), so a motion may run on until it is
-    /// at rest.
+    /// beyond τ the forcing term fades out ([`crate::dmp::phase::FADE`]) and the DMPs settle
+    /// on their goals as the bare critically damped spring of Eq. (1), so a motion may run on
+    /// until it is at rest.
     pub fn set_steps(&mut self, n: usize) {
         self.phase.n_steps = n.max(self.phase.step);
     }

@@ -141,6 +141,82 @@ fn rotation_dmp_reaches_new_goal() {
     assert!(log(&(out[n - 1] * goal.inverse())).norm() < 0.5f64.to_radians());
 }
 
+/// A demonstration that stops the way a time-parameterised program does: constant
+/// acceleration, cruise, constant deceleration until rest at t = 2 s (the deceleration does not
+/// fade out first, so the trained forcing term is far from 0 at τ).
+fn trapezoid_point(t: f64) -> Vector3<f64> {
+    // Speed 0.4 m/s reached in 0.4 s; 0.64 m in 2 s.
+    let (a, v, t_end) = (1.0, 0.4, 2.0);
+    let t = t.clamp(0.0, t_end);
+    let s = if t < 0.4 {
+        0.5 * a * t * t
+    } else if t < t_end - 0.4 {
+        0.08 + v * (t - 0.4)
+    } else {
+        let r = t_end - t;
+        0.64 - 0.5 * a * r * r
+    };
+    Vector3::new(0.8, -0.5, 0.3) * (s / 0.64 * 0.5)
+}
+
+/// Beyond τ the demonstration is at rest on its goal, so a motion run on past τ (to come to a
+/// stop) must stay there: the forcing term fades out over a short share of τ and the DMP settles
+/// as the bare spring of Eq. (1). Left on, the forcing term's value at τ pushed such runs
+/// millimetres off their goal before they came back (issue 22: half the timed candidates of
+/// the example cell were refused as having missed their goal).
+#[test]
+fn a_run_past_tau_stays_on_its_goal_with_bounded_jerk() {
+    use prf_shared::dmp::phase::FADE;
+    let dmp = PositionDmp::train(&DmpParams::default(), DEMO_DT, 201, |k| {
+        trapezoid_point(k as f64 * DEMO_DT)
+    })
+    .unwrap();
+    let end = 2000;
+    for offset in [
+        Vector3::zeros(),
+        Vector3::new(0.05, 0.0, 0.0),
+        Vector3::new(-0.03, 0.04, -0.02),
+    ] {
+        let goal = trapezoid_point(2.0) + offset;
+        let (mut state, mut phase) = dmp.start(&trapezoid_point(0.0), &goal, RUN_DT).unwrap();
+        assert_eq!(phase.n_steps, end);
+        phase.n_steps = 2 * end;
+        let mut y = vec![state.y];
+        while !phase.finished() {
+            state.step(&dmp.params, &dmp.forcing, dmp.tau, RUN_DT, &phase);
+            phase.advance();
+            y.push(state.y);
+        }
+        // Jerk by third differences. Fading the acceleration a(τ) out linearly over
+        // T = FADE·τ takes a jerk of a(τ)/T; the spring adds little to it.
+        let d2 = |k: usize| (y[k + 1] - y[k] * 2.0 + y[k - 1]).norm() / RUN_DT.powi(2);
+        let jerk =
+            |k: usize| (y[k + 3] - y[k + 2] * 3.0 + y[k + 1] * 3.0 - y[k]).norm() / RUN_DT.powi(3);
+        let fade_jerk = d2(end) / (FADE * dmp.tau);
+        let after = (end - 3..2 * end - 3).map(jerk).fold(0.0, f64::max);
+        let off = (end..=2 * end)
+            .map(|k| (y[k] - goal).norm())
+            .fold(0.0, f64::max);
+        println!(
+            "offset {offset:?}: a(τ) {:.2} m/s², at τ {:.3} mm off, after τ at most {:.3} mm, at 2τ {:.1e} m; jerk after τ {after:.1} m/s³, fading a(τ) {fade_jerk:.1}",
+            d2(end),
+            (y[end] - goal).norm() * 1e3,
+            off * 1e3,
+            (y[2 * end] - goal).norm()
+        );
+        assert!(
+            d2(end) > 0.5,
+            "the demonstration should stop decelerating hard"
+        );
+        assert!(off < 0.25e-3, "{offset:?}: {off} m off the goal after τ");
+        assert!(
+            (y[2 * end] - goal).norm() < 1e-6,
+            "{offset:?}: not settled by 2τ"
+        );
+        assert!(after <= 1.1 * fade_jerk, "{offset:?}: jerk {after} after τ");
+    }
+}
+
 #[test]
 fn bad_input_gives_typed_errors() {
     let p = DmpParams::default();

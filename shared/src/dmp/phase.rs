@@ -34,6 +34,15 @@ pub struct Features {
     pub last: usize,
 }
 
+impl Features {
+    /// No basis active: a forcing term of zero.
+    pub const ZERO: Features = Features {
+        values: [0.0; MAX_BASES],
+        first: 0,
+        last: 0,
+    };
+}
+
 impl Basis {
     /// The bases of `p`, centres spread evenly in time.
     pub fn new(p: &DmpParams) -> Result<Self, DmpError> {
@@ -77,11 +86,7 @@ impl Basis {
         }
         if sum <= 0.0 {
             // Far beyond the last centre (ζ → 0): the gated forcing term is zero.
-            return Features {
-                values: [0.0; MAX_BASES],
-                first: 0,
-                last: 0,
-            };
+            return Features::ZERO;
         }
         let k = zeta / sum;
         for v in &mut values[first..last] {
@@ -95,6 +100,15 @@ impl Basis {
     }
 }
 
+/// Share of τ over which the forcing term fades linearly to zero after τ. The demonstration
+/// defines f only on [0, τ]; a program typically stops still decelerating, so f(τ) ≠ 0, and a
+/// motion that runs on past τ (to come to a stop within the jerk limit) must not keep it.
+/// Fading keeps the acceleration continuous (jerk ≈ a(τ)/(FADE·τ)) and, scaling with τ, lets
+/// a time-scaled motion's jerk fall with the cube of the scale like the rest of it. On the
+/// example cell 0.005 τ (15–25 ms) ends every timed candidate within 0.29 mm of its goal and
+/// slows none; a cut in one step slows some (a jerk step), 0.01 τ doubles the end error.
+pub const FADE: f64 = 0.005;
+
 /// Phase of one integration: ζ and the features at the current and the next step.
 #[derive(Clone, Copy, Debug)]
 pub struct Phase {
@@ -102,8 +116,12 @@ pub struct Phase {
     pub basis: Basis,
     /// Step index k (time kΔt).
     pub step: usize,
-    /// Number of steps of the whole motion, round(τ/Δt).
+    /// Number of steps of the whole motion, round(τ/Δt) unless a caller runs it on.
     pub n_steps: usize,
+    /// round(τ/Δt): the steps the forcing term was trained over. Beyond them it fades out.
+    end: usize,
+    /// Steps over which the forcing term fades to zero after `end` ([`FADE`] × τ).
+    fade: usize,
     decay: f64,
     /// ζ_k and ζ_{k+1}.
     pub zeta: f64,
@@ -123,10 +141,13 @@ impl Phase {
         }
         let basis = Basis::new(p)?;
         let decay = libm::exp(-p.alpha_zeta * dt / tau);
+        let end = libm::round(tau / dt) as usize;
         Ok(Phase {
             basis,
             step: 0,
-            n_steps: libm::round(tau / dt) as usize,
+            n_steps: end,
+            end,
+            fade: (libm::round(FADE * tau / dt) as usize).max(1),
             decay,
             zeta: 1.0,
             zeta_next: decay,
@@ -141,7 +162,27 @@ impl Phase {
         self.zeta = self.zeta_next;
         self.current = self.next;
         self.zeta_next *= self.decay;
-        self.next = self.basis.features(self.zeta_next);
+        self.next = self.features_at(self.step + 1, self.zeta_next);
+    }
+
+    /// φ at step `k` with phase `zeta`: the bases' features up to τ, then fading linearly to
+    /// zero over [`FADE`]·τ. Beyond, the DMP is the bare critically damped spring of Eq. (1)
+    /// and settles on its goal; left on, f(ζ) decayed only with ζ and pushed a motion that
+    /// ran on past τ millimetres off its goal and back.
+    fn features_at(&self, k: usize, zeta: f64) -> Features {
+        if k <= self.end {
+            return self.basis.features(zeta);
+        }
+        let left = (self.end + self.fade).saturating_sub(k);
+        if left == 0 {
+            return Features::ZERO;
+        }
+        let mut phi = self.basis.features(zeta);
+        let gate = left as f64 / self.fade as f64;
+        for v in &mut phi.values[phi.first..phi.last] {
+            *v *= gate;
+        }
+        phi
     }
 
     /// The phase at step `step` with ζ_k = `zeta`, ζ_{k+1} = `zeta_next` (from a saved
@@ -166,8 +207,8 @@ impl Phase {
         self.step = step;
         self.zeta = zeta;
         self.zeta_next = zeta_next;
-        self.current = self.basis.features(zeta);
-        self.next = self.basis.features(zeta_next);
+        self.current = self.features_at(step, zeta);
+        self.next = self.features_at(step + 1, zeta_next);
     }
 
     /// True once all `n_steps` steps are done.
