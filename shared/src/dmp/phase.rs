@@ -162,27 +162,20 @@ impl Phase {
         self.zeta = self.zeta_next;
         self.current = self.next;
         self.zeta_next *= self.decay;
-        self.next = self.features_at(self.step + 1, self.zeta_next);
+        let gate = self.gate(self.step + 1);
+        gated_features(&self.basis, gate, self.zeta_next, &mut self.next);
     }
 
-    /// φ at step `k` with phase `zeta`: the bases' features up to τ, then fading linearly to
-    /// zero over [`FADE`]·τ. Beyond, the DMP is the bare critically damped spring of Eq. (1)
-    /// and settles on its goal; left on, f(ζ) decayed only with ζ and pushed a motion that
-    /// ran on past τ millimetres off its goal and back.
-    fn features_at(&self, k: usize, zeta: f64) -> Features {
+    /// The weight of the forcing term at step `k`: 1 up to τ, then falling linearly to 0 over
+    /// [`FADE`]·τ. Beyond, the DMP is the bare critically damped spring of Eq. (1) and settles
+    /// on its goal; left on, f(ζ) decayed only with ζ and pushed a motion that ran on past τ
+    /// millimetres off its goal and back.
+    fn gate(&self, k: usize) -> f64 {
         if k <= self.end {
-            return self.basis.features(zeta);
+            1.0
+        } else {
+            (self.end + self.fade).saturating_sub(k) as f64 / self.fade as f64
         }
-        let left = (self.end + self.fade).saturating_sub(k);
-        if left == 0 {
-            return Features::ZERO;
-        }
-        let mut phi = self.basis.features(zeta);
-        let gate = left as f64 / self.fade as f64;
-        for v in &mut phi.values[phi.first..phi.last] {
-            *v *= gate;
-        }
-        phi
     }
 
     /// The phase at step `step` with ζ_k = `zeta`, ζ_{k+1} = `zeta_next` (from a saved
@@ -207,12 +200,32 @@ impl Phase {
         self.step = step;
         self.zeta = zeta;
         self.zeta_next = zeta_next;
-        self.current = self.features_at(step, zeta);
-        self.next = self.features_at(step + 1, zeta_next);
+        let (now, then) = (self.gate(step), self.gate(step + 1));
+        gated_features(&self.basis, now, zeta, &mut self.current);
+        gated_features(&self.basis, then, zeta_next, &mut self.next);
     }
 
     /// True once all `n_steps` steps are done.
     pub fn finished(&self) -> bool {
         self.step >= self.n_steps
+    }
+}
+
+/// φ(`zeta`) weighted by `gate` ([`Phase::gate`]), written into `out` in place; at gate 0 no
+/// basis is evaluated. Not inlined: inlined, its features temporary (416 B) raised the
+/// Cortex-M7's stack high-water mark by 2.8 KiB (`prf firmware`).
+#[inline(never)]
+fn gated_features(basis: &Basis, gate: f64, zeta: f64, out: &mut Features) {
+    if gate <= 0.0 {
+        // An empty range: the forcing term sums nothing.
+        out.first = 0;
+        out.last = 0;
+        return;
+    }
+    *out = basis.features(zeta);
+    if gate < 1.0 {
+        for v in &mut out.values[out.first..out.last] {
+            *v *= gate;
+        }
     }
 }
