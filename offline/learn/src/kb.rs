@@ -351,4 +351,12 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<LearnerState, KbError> {
     postcard::from_bytes(payload).map_err(|e| KbError::Decode(e.to_string()))
 }
 
-use prf_shared::blob::crc32;
+/// The CRC-32 of the blob ([`prf_shared::blob::CRC32`], the same values) computed 16 bytes a
+/// step: a 45 MB knowledge base takes 9 ms instead of 94 ms, on reading and on writing. The
+/// firmware keeps the blob's byte-wise table (1 KiB of flash against 16 KiB).
+static KB_CRC32: crc::Crc<u32, crc::Table<16>> =
+    crc::Crc::<u32, crc::Table<16>>::new(&crc::CRC_32_ISO_HDLC);
+
+fn crc32(data: &[u8]) -> u32 {
+    KB_CRC32.checksum(data)
+}

@@ -27,6 +27,7 @@ use prf_shared::field::{
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
+use rustc_hash::FxHashSet;
 use std::collections::HashSet;
 
 /// Settings of workspace learning.
@@ -84,13 +85,13 @@ pub struct PathSphere {
 #[derive(Clone, Debug)]
 pub struct Sweep {
     pub spheres: Vec<SphereSample>,
-    seen: HashSet<(i32, i32, i32, u8)>,
+    seen: FxHashSet<(i32, i32, i32, u8)>,
     /// Feature-ball spacing, m ([`WorkspaceConfig::feature_spacing`]).
     feature_spacing: f64,
     /// The thinned spheres (centre, r_j): every sphere whose centre is not within the
     /// feature spacing of an already kept one of the same radius.
     features: Vec<(Vector3<f64>, f64)>,
-    kept: HashSet<(i64, i64, i64, i64)>,
+    kept: FxHashSet<(i64, i64, i64, i64)>,
     /// The last field build's splat, continued by the next one.
     splat: Option<Splat>,
     /// The last field build's certificate decisions, continued by the next one.
@@ -109,10 +110,10 @@ impl Sweep {
     pub fn new(feature_spacing: f64) -> Self {
         Sweep {
             spheres: Vec::new(),
-            seen: HashSet::new(),
+            seen: FxHashSet::default(),
             feature_spacing,
             features: Vec::new(),
-            kept: HashSet::new(),
+            kept: FxHashSet::default(),
             splat: None,
             certified: None,
         }
