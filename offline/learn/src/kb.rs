@@ -360,3 +360,23 @@ static KB_CRC32: crc::Crc<u32, crc::Table<16>> =
 fn crc32(data: &[u8]) -> u32 {
     KB_CRC32.checksum(data)
 }
+
+#[cfg(test)]
+mod tests {
+    /// The file format states the blob's CRC-32: the 16-byte-a-step table gives its values.
+    #[test]
+    fn the_knowledge_base_crc_is_the_blobs() {
+        let bytes: Vec<u8> = (0..100_003u32)
+            .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+            .collect();
+        for n in [0, 1, 15, 16, 17, 1000, bytes.len()] {
+            assert_eq!(
+                super::crc32(&bytes[..n]),
+                prf_shared::blob::crc32(&bytes[..n]),
+                "{n} bytes"
+            );
+        }
+        // The check value of CRC-32/ISO-HDLC.
+        assert_eq!(super::crc32(b"123456789"), 0xcbf4_3926);
+    }
+}
