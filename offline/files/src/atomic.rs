@@ -18,6 +18,14 @@ fn parent(path: &Path) -> &Path {
     }
 }
 
+/// The directory the temporary entry for `path` goes in, created if missing (like the target's
+/// own parent directories: `prf gen -o new/dir/dataset` works on a fresh checkout).
+fn parent_created(path: &Path) -> io::Result<&Path> {
+    let p = parent(path);
+    std::fs::create_dir_all(p)?;
+    Ok(p)
+}
+
 /// A temporary file beside `path`, with `path`'s extension (some writers choose the format by
 /// it).
 pub fn temp_beside(path: &Path) -> io::Result<tempfile::NamedTempFile> {
@@ -28,7 +36,7 @@ pub fn temp_beside(path: &Path) -> io::Result<tempfile::NamedTempFile> {
     tempfile::Builder::new()
         .prefix(TMP_PREFIX)
         .suffix(&suffix)
-        .tempfile_in(parent(path))
+        .tempfile_in(parent_created(path)?)
 }
 
 /// Moves a complete temporary file over `path` (after syncing it).
@@ -62,7 +70,7 @@ pub fn replace_dir<T>(dir: &Path, fill: impl FnOnce(&Path) -> io::Result<T>) -> 
         .unwrap_or_else(|| "dir".into());
     let tmp = tempfile::Builder::new()
         .prefix(&format!("{TMP_PREFIX}{name}-"))
-        .tempdir_in(parent(dir))?;
+        .tempdir_in(parent_created(dir)?)?;
     let out = fill(tmp.path())?;
     for entry in std::fs::read_dir(tmp.path())? {
         File::open(entry?.path())?.sync_all()?;
@@ -118,5 +126,16 @@ mod tests {
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
         assert_eq!(names.len(), 2, "{names:?}");
+    }
+
+    #[test]
+    fn missing_parent_directories_are_created() {
+        let base = tempfile::tempdir().unwrap();
+        let f = base.path().join("a/b/cell.blob");
+        write(&f, b"blob").unwrap();
+        assert_eq!(std::fs::read(&f).unwrap(), b"blob");
+        let d = base.path().join("c/d/dataset");
+        replace_dir(&d, |t| std::fs::write(t.join("x"), "1")).unwrap();
+        assert!(d.join("x").exists());
     }
 }
