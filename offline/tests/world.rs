@@ -208,8 +208,10 @@ fn self_collision_is_detected() {
     let cell = Cell::new(&w, &model);
     let home = [w.home.x, w.home.y, 0.0];
     let deg = |d: [f64; 7]| d.map(f64::to_radians);
-    // Gripper folded back onto the shoulder (TCP 0.13 m from the joint-2 axis).
-    let r = cell.clearance(home, &deg([0.0, 30.0, 0.0, -120.0, 0.0, 120.0, 0.0]));
+    // Gripper folded back onto the upper arm: joints 4 and 6 at their limits, joint 3 turned
+    // 90° so that the fingers sink into link 2 (46 mm deep with the spheres; with joint 3 at
+    // 0 they pass it 0.6 mm apart, since issue 23's tighter spheres).
+    let r = cell.clearance(home, &deg([0.0, 30.0, 90.0, -120.0, 0.0, 120.0, 0.0]));
     assert!(r.self_ < 0.0, "{r:?}");
     assert!(
         matches!(r.self_contact, Contact::SelfSpheres { .. }),

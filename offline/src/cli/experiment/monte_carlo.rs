@@ -93,8 +93,8 @@ pub fn run(a: &MonteCarloArgs) -> Result<()> {
                     feasible.join(", ")
                 };
                 println!(
-                    "  {name}: {} of {tasks} tasks physically feasible ({which})",
-                    s.counts.physical_tasks
+                    "  {name}: {} of {tasks} tasks physically feasible ({which}); {} of {afforded} afforded tasks",
+                    s.counts.physical_tasks, s.counts.physical_afforded
                 );
             }
             None => println!("  {name}: not in this dataset"),
