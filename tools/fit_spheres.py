@@ -204,10 +204,10 @@ def greedy_cover(covers, k):
     return chosen
 
 
-def fit(link, tris, k, solids, rng):
-    """k spheres containing every triangle of the link, overhanging its body as little as the
-    greedy cover finds (see the module documentation); returns centres, radii and the bound T."""
-    distance = BodyDistance(link, tris, solids)
+def fit(link, tris, k, distance, solids, rng):
+    """k spheres containing every triangle of the link, overhanging its body (`distance`, a
+    BodyDistance) as little as the greedy cover finds (see the module documentation); returns
+    centres, radii and the bound T."""
     small = split(tris, EDGE)
     v = tris.reshape(-1, 3)
     pts = rng.uniform(v.min(axis=0), v.max(axis=0), size=(4 * CANDIDATES, 3))
@@ -387,12 +387,12 @@ def main():
     print("overhang, mm: beyond the link's own mesh | beyond its body (the fit's measure)")
     for link, k in enumerate(SPHERES_PER_LINK):
         tris = meshes[link]
-        centres, radii, bound = fit(link, tris, k, solids, rng)
+        distance = BodyDistance(link, tris, solids)
+        centres, radii, bound = fit(link, tris, k, distance, solids, rng)
         model.append((centres, radii))
         dense = surface_samples(tris, per_tri=20, rng=rng)
         s = slack(dense, centres, radii)
         worst = min(worst, s.min())
-        distance = BodyDistance(link, tris, solids)
         old_c, old_r = before[link]
         print(f"link {link}: {len(tris)} triangles, {len(radii)} spheres, radii {np.round(radii, 3)}, "
               f"{len(dense)} surface samples, min slack {s.min() * 1000:.2f} mm: "
