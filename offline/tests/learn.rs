@@ -568,3 +568,50 @@ fn anchored_lookups_agree_with_full_lookups() {
         "{skipped} of {lookups} lookups settled by their anchor"
     );
 }
+
+/// `Field::cell_at` against floor and clamping worked out independently: random points of the
+/// grid box, points on and just off node planes, and points far outside it (±1e30, ∞, NaN).
+#[test]
+fn cells_are_floored_and_clamped_to_the_grid() {
+    let field = workspace(fixture(), 0);
+    let (dims, h) = (field.dims(), field.voxel());
+    let origin = field.node_position(0, 0, 0);
+    let last = dims.map(|n| n - 2);
+    let expected = |x: &Vector3<f64>| -> [usize; 3] {
+        core::array::from_fn(|a| {
+            // The grid coordinate as the field computes it (its inverse voxel, 1 / h).
+            let g = (x[a] - origin[a]) * (1.0 / h);
+            if g.is_nan() || g <= 0.0 {
+                0
+            } else {
+                (g.floor().min(last[a] as f64)) as usize
+            }
+        })
+    };
+    let mut rng = StdRng::seed_from_u64(9);
+    let top = field.node_position(dims[0] - 1, dims[1] - 1, dims[2] - 1);
+    for _ in 0..20_000 {
+        let x = Vector3::from_fn(|a, _| rng.random_range(origin[a] - 0.5..top[a] + 0.5));
+        assert_eq!(field.cell_at(&x), expected(&x), "{x:?}");
+    }
+    // Node planes, a hair either side (the grid coordinate's rounding decides; both agree).
+    for i in 0..dims[0] {
+        let node = field.node_position(i, dims[1] / 2, dims[2] / 2);
+        for dx in [-1e-12, 0.0, 1e-12] {
+            let x = node + Vector3::new(dx, 0.25 * h, 0.25 * h);
+            assert_eq!(field.cell_at(&x)[0], expected(&x)[0], "{x:?}");
+        }
+    }
+    for v in [
+        1e30,
+        -1e30,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        1e10,
+    ] {
+        let x = Vector3::repeat(v);
+        let want = if v > 0.0 { last } else { [0; 3] };
+        assert_eq!(field.cell_at(&x), want, "{v}");
+    }
+}

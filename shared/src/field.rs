@@ -35,6 +35,9 @@ pub const OFFSET_UNIT: f64 = 0.002;
 pub const MM: f64 = 0.001;
 /// Brick map entries at or above this are uniform bricks with value (entry − UNIFORM) mm.
 pub const UNIFORM: u16 = 0x8000;
+/// Margin kept from a cell's faces by the anchored lookup's first test, m: far above the
+/// rounding of a point's cell coordinates (≈ 1e-15 m in a grid of metres).
+pub const FACE_MARGIN: f64 = 1e-9;
 /// Bytes per certificate ball: cell u32, centre i16×3 (mm, location frame), radius u16 mm.
 pub const CERT_BYTES: usize = 12;
 
@@ -69,6 +72,10 @@ pub struct Hint {
     anchor: Vector3<f64>,
     /// (s_a − v)², or 0 (no anchor).
     slack2: f64,
+    /// The square of the slack, or less: of the anchor's distance to its cell's faces
+    /// (less [`FACE_MARGIN`]) when that is smaller. Within it the point is still in the cell,
+    /// so a lookup is settled before the cell is even computed.
+    inner2: f64,
     /// s_a.
     stop: f64,
 }
@@ -319,8 +326,17 @@ impl<'a> Field<'a> {
 
     /// Cell containing the grid-box point with grid coordinates `g`.
     fn cell_of(&self, g: &Vector3<f64>) -> [usize; 3] {
-        // Truncation is floor for g ≥ 0; below 0 (and NaN) clamps to cell 0.
-        core::array::from_fn(|a| (if g[a] > 0.0 { g[a] as usize } else { 0 }).min(self.dims[a] - 2))
+        // Truncation is floor for g ≥ 0; below 0 (and NaN) clamps to cell 0, above to the last
+        // cell. Clamped before the conversion, which is then one instruction (a saturating
+        // float-to-usize conversion is a branchy sequence on x86-64).
+        core::array::from_fn(|a| {
+            let last = self.dims[a] - 2;
+            if g[a] > 0.0 {
+                g[a].min(last as f64) as u32 as usize
+            } else {
+                0
+            }
+        })
     }
 
     /// The lookup terms of cell `c` (its 8 corner nodes and its certificates) evaluated at
@@ -428,6 +444,12 @@ impl<'a> Field<'a> {
         best - delta
     }
 
+    /// Distance from `x`, a point of cell `c`, to the nearest face of the cell.
+    fn face_distance(&self, c: [usize; 3], x: &Vector3<f64>) -> f64 {
+        let local = x - self.node_position(c[0], c[1], c[2]);
+        (0..3).fold(f64::INFINITY, |m, a| m.min(local[a]).min(self.h - local[a]))
+    }
+
     /// Linear index of cell (i, j, k).
     pub fn cell_index(&self, c: [usize; 3]) -> u32 {
         ((c[0] * (self.dims[1] - 1) + c[1]) * (self.dims[2] - 1) + c[2]) as u32
@@ -446,6 +468,10 @@ impl DistanceField for Field<'_> {
     }
 
     fn distance_upto(&self, p: &Vector3<f64>, stop: f64, hint: &mut Hint) -> f64 {
+        if self.anchored && hint.stop <= stop && (p - hint.anchor).norm_squared() < hint.inner2 {
+            // Still in the anchor's cell and within its slack (the test below, before the cell).
+            return hint.stop;
+        }
         let inside = (0..3).all(|a| p[a] >= self.origin[a] && p[a] <= self.top[a]);
         if inside {
             let c = self.cell_at(p);
@@ -463,6 +489,8 @@ impl DistanceField for Field<'_> {
                 let slack = stop - exact;
                 (hint.anchor, hint.stop) = (*p, stop);
                 hint.slack2 = if slack > 0.0 { slack * slack } else { 0.0 };
+                let inner = slack.min(self.face_distance(c, p) - FACE_MARGIN);
+                hint.inner2 = if inner > 0.0 { inner * inner } else { 0.0 };
             }
             return v;
         }
@@ -472,7 +500,7 @@ impl DistanceField for Field<'_> {
         if !outside.is_finite() {
             return f64::NAN;
         }
-        hint.slack2 = 0.0;
+        (hint.slack2, hint.inner2) = (0.0, 0.0);
         self.distance_in_cell_upto(self.cell_at(&q), &q, stop - outside, hint) + outside
     }
 }

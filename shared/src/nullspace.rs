@@ -45,8 +45,34 @@ pub struct JacobianQr {
 }
 
 impl JacobianQr {
-    /// The QR of Jᵀ.
+    /// The QR of Jᵀ: the six Householder steps unrolled for the 7 × 6 shape
+    /// ([`reflect`]); the same operations in the same order as [`JacobianQr::new_looped`].
     pub fn new(j: &Jacobian) -> Self {
+        // a = Jᵀ, column-major by construction: a[c][row] is Jᵀ(row, c) = J(c, row).
+        let mut a = [[0.0; 7]; 6];
+        for (c, col) in a.iter_mut().enumerate() {
+            for (row, v) in col.iter_mut().enumerate() {
+                *v = j[(c, row)];
+            }
+        }
+        let mut qr = JacobianQr {
+            v: [[0.0; 7]; 6],
+            beta: [0.0; 6],
+            r: [[0.0; 6]; 6],
+            det_q: 1.0,
+        };
+        reflect::<0>(&mut a, &mut qr);
+        reflect::<1>(&mut a, &mut qr);
+        reflect::<2>(&mut a, &mut qr);
+        reflect::<3>(&mut a, &mut qr);
+        reflect::<4>(&mut a, &mut qr);
+        reflect::<5>(&mut a, &mut qr);
+        qr
+    }
+
+    /// [`JacobianQr::new`] as generic loops: the previous implementation, kept as the
+    /// benchmark's baseline (`prf bench`); the same factorisation bit for bit.
+    pub fn new_looped(j: &Jacobian) -> Self {
         // a = Jᵀ, column-major by construction: a[c][row] is Jᵀ(row, c) = J(c, row).
         let mut a = [[0.0; 7]; 6];
         for (c, col) in a.iter_mut().enumerate() {
@@ -103,8 +129,13 @@ impl JacobianQr {
 
     /// Kernel of J, oriented as the generalized cross product of its rows.
     pub fn kernel(&self) -> Kernel {
-        let mut q7 = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        let mut q7 = E7;
         self.apply_q(&mut q7);
+        self.oriented(q7)
+    }
+
+    /// The kernel from q_7 = Q e_7: c = det Q · det R · q_7, normalised.
+    fn oriented(&self, q7: [f64; 7]) -> Kernel {
         let det = self.det_q * self.det_r();
         let w = libm::fabs(det);
         let direction = if w > 0.0 {
@@ -121,6 +152,14 @@ impl JacobianQr {
     /// Minimum-norm solution J⁺V = Q [R⁻ᵀV; 0] of J q̇ = V; `None` if J is numerically rank
     /// deficient (a diagonal entry of R below [`RANK_TOLERANCE`] × the largest one).
     pub fn pinv_apply(&self, v: &Vector6<f64>) -> Option<JointVector> {
+        let mut y = self.r_inv_t(v)?;
+        self.apply_q(&mut y);
+        finite(y)
+    }
+
+    /// [R⁻ᵀV; 0] by forward substitution; `None` if a diagonal entry of R is below
+    /// [`RANK_TOLERANCE`] × the largest one.
+    fn r_inv_t(&self, v: &Vector6<f64>) -> Option<[f64; 7]> {
         let scale = (0..6).map(|k| libm::fabs(self.r[k][k])).fold(0.0, f64::max);
         let mut y = [0.0; 7];
         for i in 0..6 {
@@ -131,9 +170,93 @@ impl JacobianQr {
             let s: f64 = (0..i).map(|k| self.r[k][i] * y[k]).sum();
             y[i] = (v[i] - s) / d;
         }
-        self.apply_q(&mut y);
-        let out = JointVector::from(y);
-        out.iter().all(|x| x.is_finite()).then_some(out)
+        Some(y)
+    }
+}
+
+/// e_7.
+const E7: [f64; 7] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+
+/// `y` as a joint vector if every entry is finite.
+fn finite(y: [f64; 7]) -> Option<JointVector> {
+    let out = JointVector::from(y);
+    out.iter().all(|x| x.is_finite()).then_some(out)
+}
+
+/// Σ_{i ≥ K} a_i b_i, summed in index order (the first product is the start: the same
+/// bits as a sum from −0).
+#[inline(always)]
+fn dot_from<const K: usize>(a: &[f64; 7], b: &[f64; 7]) -> f64 {
+    let mut s = a[K] * b[K];
+    for i in K + 1..7 {
+        s += a[i] * b[i];
+    }
+    s
+}
+
+/// Householder step K of [`JacobianQr::new`] on the remaining columns of `a`, with the loop
+/// bounds known at compile time.
+#[inline(always)]
+fn reflect<const K: usize>(a: &mut [[f64; 7]; 6], qr: &mut JacobianQr) {
+    let norm = libm::sqrt(dot_from::<K>(&a[K], &a[K]));
+    let alpha = if a[K][K] >= 0.0 { -norm } else { norm };
+    let mut vk = [0.0; 7];
+    vk[K..].copy_from_slice(&a[K][K..]);
+    vk[K] -= alpha;
+    let vv = dot_from::<K>(&vk, &vk);
+    if vv > 0.0 {
+        let beta = 2.0 / vv;
+        qr.beta[K] = beta;
+        qr.det_q = -qr.det_q;
+        for col in a.iter_mut().skip(K + 1) {
+            let s = beta * dot_from::<K>(&vk, col);
+            for i in K..7 {
+                col[i] -= s * vk[i];
+            }
+        }
+    }
+    qr.r[K][K] = if vv > 0.0 { alpha } else { a[K][K] };
+    for c in (K + 1)..6 {
+        qr.r[K][c] = a[c][K];
+    }
+    qr.v[K] = vk;
+}
+
+/// Reflection K of Q applied to two vectors at once (each as in [`JacobianQr::apply_q`]).
+#[inline(always)]
+fn reflect_pair<const K: usize>(qr: &JacobianQr, y: &mut [f64; 7], z: &mut [f64; 7]) {
+    let beta = qr.beta[K];
+    if beta != 0.0 {
+        let vk = &qr.v[K];
+        let sy = beta * dot_from::<K>(vk, y);
+        let sz = beta * dot_from::<K>(vk, z);
+        for i in K..7 {
+            y[i] -= sy * vk[i];
+            z[i] -= sz * vk[i];
+        }
+    }
+}
+
+impl JacobianQr {
+    /// Manipulability √det(J Jᵀ) = |det R| (the one of [`JacobianQr::kernel`]), without
+    /// applying Q.
+    pub fn manipulability(&self) -> f64 {
+        libm::fabs(self.det_q * self.det_r())
+    }
+
+    /// [`JacobianQr::kernel`] and [`JacobianQr::pinv_apply`] of `v` in one pass over the
+    /// reflections of Q (Alg. 2, line 22: M and J⁺V from one factorisation), bit for bit.
+    pub fn kernel_and_pinv(&self, v: &Vector6<f64>) -> (Kernel, Option<JointVector>) {
+        let mut q7 = E7;
+        let solved = self.r_inv_t(v);
+        let mut y = solved.unwrap_or([0.0; 7]);
+        reflect_pair::<5>(self, &mut q7, &mut y);
+        reflect_pair::<4>(self, &mut q7, &mut y);
+        reflect_pair::<3>(self, &mut q7, &mut y);
+        reflect_pair::<2>(self, &mut q7, &mut y);
+        reflect_pair::<1>(self, &mut q7, &mut y);
+        reflect_pair::<0>(self, &mut q7, &mut y);
+        (self.oriented(q7), solved.and(finite(y)))
     }
 }
 

@@ -462,18 +462,14 @@ impl RdmpRun {
         let kin = ArmKinematics::new(model, &self.q);
         observe(&kin);
         let qr = JacobianQr::new(&kin.jacobian(model));
-        let ker = qr.kernel();
-        if !(ker.manipulability >= cfg.min_manipulability) {
+        let manipulability = qr.manipulability();
+        if !(manipulability >= cfg.min_manipulability) {
             return Err(RdmpError::Singular {
                 step: k,
-                manipulability: ker.manipulability,
+                manipulability,
             });
         }
         // Work on copies and commit only on success: a refused step leaves the run unchanged.
-        let mut gamma_measured = self.gamma_measured;
-        if let Some((m0, q0)) = self.previous {
-            gamma_measured += gamma_increment(&m0, &ker.direction, &q0, &self.q);
-        }
         let (e_p, e_r) = pose_error(&self.dmp_pose(), &kin.tcp);
         let (mut position, mut rotation, mut gamma) = (self.position, self.rotation, self.gamma);
         let gamma_dmp = gamma.y[0];
@@ -482,10 +478,15 @@ impl RdmpRun {
         let w = rotation.step(&rp.params, &rp.forcing, rp.tau, cfg.dt, &self.phase);
         let g = gamma.step(&gp.params, &gp.forcing, gp.tau, cfg.dt, &self.phase);
         let twist = join(&(v + e_p * cfg.gain), &(w + e_r * cfg.gain));
+        let (ker, pinv) = qr.kernel_and_pinv(&twist);
+        let mut gamma_measured = self.gamma_measured;
+        if let Some((m0, q0)) = self.previous {
+            gamma_measured += gamma_increment(&m0, &ker.direction, &q0, &self.q);
+        }
         let gamma_rate = g[0] + cfg.gain * (gamma_dmp - gamma_measured);
-        let qd = qr.pinv_apply(&twist).ok_or(RdmpError::Singular {
+        let qd = pinv.ok_or(RdmpError::Singular {
             step: k,
-            manipulability: ker.manipulability,
+            manipulability,
         })? + ker.direction * gamma_rate;
         let q = self.q + qd * cfg.dt;
         if q.iter().any(|v| !v.is_finite()) {

@@ -80,6 +80,8 @@ pub fn run_at(
     let nominal = run.progress().1;
     let mut meter = ArmMeter::at_rest(limits, cfg.dt, &(*q0).into());
     let mut steps = 0;
+    // The ratios last found hopeful: they only grow, and only a new peak needs a new look.
+    let mut hopeful = None;
     // Each step shows the FK of the configuration it leaves: q_0 … q_{n−1}; q_n comes last.
     loop {
         if steps >= cap {
@@ -91,11 +93,12 @@ pub fn run_at(
         };
         steps += 1;
         meter.push(&q.into());
-        if hopeless(&meter.ratios(), scale) {
-            return Run::TooFast {
-                steps,
-                ratios: meter.ratios(),
-            };
+        let ratios = meter.ratios();
+        if hopeful != Some(ratios) {
+            if hopeless(&ratios, scale) {
+                return Run::TooFast { steps, ratios };
+            }
+            hopeful = Some(ratios);
         }
         if steps >= nominal {
             if meter.stop_ratios().within() || steps >= 2 * nominal {

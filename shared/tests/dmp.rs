@@ -255,3 +255,54 @@ fn bad_input_gives_typed_errors() {
         DmpError::BadParams
     );
 }
+
+/// The phase writes its features in place and flips between two buffers instead of copying:
+/// at every step of a motion, after a seek back, and past τ (where the fade scales them), φ
+/// is the fresh evaluation of the bases at ζ, every value outside the active range zero.
+#[test]
+fn phase_features_in_place_equal_fresh_evaluations() {
+    use prf_shared::dmp::{Basis, Phase};
+    let p = DmpParams::default();
+    let basis = Basis::new(&p).unwrap();
+    let mut phase = Phase::new(&p, 1.5, RUN_DT).unwrap();
+    let end = phase.n_steps;
+    let check = |phase: &Phase| {
+        assert_eq!(
+            *phase.current(),
+            basis.features(phase.zeta),
+            "step {}",
+            phase.step
+        );
+        assert_eq!(
+            *phase.next(),
+            basis.features(phase.zeta_next),
+            "step {}",
+            phase.step
+        );
+    };
+    check(&phase);
+    while phase.step + 1 < end {
+        phase.advance();
+        check(&phase);
+    }
+    // Back to step 700 (features are a function of ζ alone: any ζ checks the seek).
+    phase.seek(700, phase.zeta, phase.zeta_next);
+    check(&phase);
+    // Past τ the fade shrinks φ to zero over FADE·τ; the active range empties, every value 0.
+    phase.n_steps = 2 * end;
+    phase.seek(end - 1, phase.zeta, phase.zeta_next);
+    while phase.step < 2 * end - 1 {
+        phase.advance();
+        let (now, fresh) = (phase.current(), basis.features(phase.zeta));
+        if now.last != 0 {
+            assert_eq!((now.first, now.last), (fresh.first, fresh.last));
+        }
+        let outside = (0..now.values.len()).filter(|i| !(now.first..now.last).contains(i));
+        assert!(outside.into_iter().all(|i| now.values[i] == 0.0));
+    }
+    assert_eq!(
+        phase.current().last,
+        0,
+        "the fade ends with no basis active"
+    );
+}

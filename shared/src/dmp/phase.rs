@@ -70,7 +70,15 @@ impl Basis {
 
     /// φ(ζ) for all bases.
     pub fn features(&self, zeta: f64) -> Features {
-        let mut values = [0.0; MAX_BASES];
+        let mut out = Features::ZERO;
+        self.features_into(zeta, &mut out);
+        out
+    }
+
+    /// [`Basis::features`] written over `out` in place (no 30-value temporary to copy).
+    pub fn features_into(&self, zeta: f64, out: &mut Features) {
+        out.values[out.first..out.last].fill(0.0);
+        let values = &mut out.values;
         let (mut first, mut last) = (usize::MAX, 0);
         let mut sum = 0.0;
         for i in 0..self.n {
@@ -86,17 +94,15 @@ impl Basis {
         }
         if sum <= 0.0 {
             // Far beyond the last centre (ζ → 0): the gated forcing term is zero.
-            return Features::ZERO;
+            *out = Features::ZERO;
+            return;
         }
         let k = zeta / sum;
         for v in &mut values[first..last] {
             *v *= k;
         }
-        Features {
-            values,
-            first,
-            last,
-        }
+        out.first = first;
+        out.last = last;
     }
 }
 
@@ -127,15 +133,25 @@ pub struct Phase {
     pub zeta: f64,
     /// ζ_{k+1}.
     pub zeta_next: f64,
-    /// φ(ζ_k).
-    pub current: Features,
-    /// φ(ζ_{k+1}).
-    pub next: Features,
+    /// φ(ζ_k) and φ(ζ_{k+1}), at `features[now]` and `features[1 − now]`: advancing flips
+    /// `now` instead of copying.
+    features: [Features; 2],
+    now: usize,
 }
 
 impl Phase {
     /// Phase for a motion of duration `tau` integrated with step `dt`.
     pub fn new(p: &DmpParams, tau: f64, dt: f64) -> Result<Self, DmpError> {
+        let mut phase = Phase::unset(p, tau, dt)?;
+        let [current, next] = &mut phase.features;
+        phase.basis.features_into(1.0, current);
+        phase.basis.features_into(phase.zeta_next, next);
+        Ok(phase)
+    }
+
+    /// The phase at step 0 with no features computed yet (all zero), for [`Phase::new`] and
+    /// [`Phase::resume`] to fill in place.
+    fn unset(p: &DmpParams, tau: f64, dt: f64) -> Result<Self, DmpError> {
         if !(dt > 0.0 && tau >= dt && tau.is_finite()) {
             return Err(DmpError::BadParams);
         }
@@ -151,19 +167,31 @@ impl Phase {
             decay,
             zeta: 1.0,
             zeta_next: decay,
-            current: basis.features(1.0),
-            next: basis.features(decay),
+            features: [Features::ZERO; 2],
+            now: 0,
         })
+    }
+
+    /// φ(ζ_k).
+    pub fn current(&self) -> &Features {
+        &self.features[self.now]
+    }
+
+    /// φ(ζ_{k+1}).
+    pub fn next(&self) -> &Features {
+        &self.features[1 - self.now]
     }
 
     /// Moves from step k to k+1: one basis evaluation.
     pub fn advance(&mut self) {
         self.step += 1;
         self.zeta = self.zeta_next;
-        self.current = self.next;
         self.zeta_next *= self.decay;
         let gate = self.gate(self.step + 1);
-        gated_features(&self.basis, gate, self.zeta_next, &mut self.next);
+        // The old φ(ζ_k) becomes φ(ζ_{k+2}).
+        let stale = self.now;
+        self.now = 1 - stale;
+        gated_features(&self.basis, gate, self.zeta_next, &mut self.features[stale]);
     }
 
     /// The weight of the forcing term at step `k`: 1 up to τ, then falling linearly to 0 over
@@ -189,7 +217,7 @@ impl Phase {
         zeta: f64,
         zeta_next: f64,
     ) -> Result<Self, DmpError> {
-        let mut phase = Phase::new(p, tau, dt)?;
+        let mut phase = Phase::unset(p, tau, dt)?;
         phase.seek(step, zeta, zeta_next);
         Ok(phase)
     }
@@ -201,8 +229,10 @@ impl Phase {
         self.zeta = zeta;
         self.zeta_next = zeta_next;
         let (now, then) = (self.gate(step), self.gate(step + 1));
-        gated_features(&self.basis, now, zeta, &mut self.current);
-        gated_features(&self.basis, then, zeta_next, &mut self.next);
+        let [current, next] = &mut self.features;
+        self.now = 0;
+        gated_features(&self.basis, now, zeta, current);
+        gated_features(&self.basis, then, zeta_next, next);
     }
 
     /// True once all `n_steps` steps are done.
@@ -218,11 +248,12 @@ impl Phase {
 fn gated_features(basis: &Basis, gate: f64, zeta: f64, out: &mut Features) {
     if gate <= 0.0 {
         // An empty range: the forcing term sums nothing.
+        out.values[out.first..out.last].fill(0.0);
         out.first = 0;
         out.last = 0;
         return;
     }
-    *out = basis.features(zeta);
+    basis.features_into(zeta, out);
     if gate < 1.0 {
         for v in &mut out.values[out.first..out.last] {
             *v *= gate;

@@ -120,10 +120,10 @@ impl<const N: usize> PositionState<N> {
         phase: &Phase,
     ) -> SVector<f64, N> {
         let h = dt / tau;
-        let f1 = forcing.eval(&phase.current, &self.amplitude);
+        let f1 = forcing.eval(phase.current(), &self.amplitude);
         let zd1 = spring(p, &(self.goal - self.y), &self.z, &f1);
         let (y_pred, z_pred) = (self.y + self.z * h, self.z + zd1 * h);
-        let f2 = forcing.eval(&phase.next, &self.amplitude);
+        let f2 = forcing.eval(phase.next(), &self.amplitude);
         let zd2 = spring(p, &(self.goal - y_pred), &z_pred, &f2);
         let vel = (self.z + z_pred) * (0.5 / tau);
         self.y += vel * dt;

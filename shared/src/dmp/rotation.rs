@@ -147,12 +147,12 @@ impl RotationState {
     ) -> Vector3<f64> {
         let h = dt / tau;
         let e1 = log_near(&(self.goal * self.r.inverse()), &self.error);
-        let f1 = forcing.eval(&phase.current, &self.amplitude);
+        let f1 = forcing.eval(phase.current(), &self.amplitude);
         let etad1 = spring(p, &e1, &self.eta, &f1);
         let r_pred = exp(&(self.eta * h)) * self.r;
         let eta_pred = self.eta + etad1 * h;
         let e2 = log_near(&(self.goal * r_pred.inverse()), &e1);
-        let f2 = forcing.eval(&phase.next, &self.amplitude);
+        let f2 = forcing.eval(phase.next(), &self.amplitude);
         let etad2 = spring(p, &e2, &eta_pred, &f2);
         let omega = (self.eta + eta_pred) * (0.5 / tau);
         self.r = exp(&(omega * dt)) * self.r;
