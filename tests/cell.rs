@@ -519,6 +519,18 @@ fn assert_brakes_to_rest(states: &[JointStateMsg], from_ns: u64, model: &RobotMo
     peak
 }
 
+/// The joint-state sequence number a "controller silent" fault names: "… (last seq N…".
+fn last_seq_named(fault: &str) -> u64 {
+    let tail = fault
+        .split("last seq ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no last seq in {fault}"));
+    let digits: String = tail.chars().take_while(char::is_ascii_digit).collect();
+    digits
+        .parse()
+        .unwrap_or_else(|e| panic!("last seq in {fault}: {e}"))
+}
+
 /// Issue 18: either process stopped (SIGSTOP) for 20 ms, 200 ms and 2 s mid-reach, then
 /// continued. A 20 ms stall of either is ridden through: no setpoint lost, the stream within
 /// the limits, the arm on its path (the controller replays late setpoints in place of the
@@ -563,21 +575,25 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
                 let detected_ms = match who {
                     Stalled::Firmware => {
                         assert!(fault.contains("firmware-sim silent"), "{fault}");
-                        // The silence runs from the last joint state published before the
-                        // fault (states published after SIGCONT, even before the test reads
-                        // its clock, come after it).
+                        // The silence runs from the last joint state the cell took, which
+                        // its fault names ("last seq N"). Not the last one stamped before
+                        // the fault: a state stamped just before SIGSTOP is published after
+                        // SIGCONT, and the cell drops it as stale.
                         let at = r["fault_t_ns"].as_u64().unwrap();
+                        let seq = last_seq_named(fault);
                         let last = s
                             .states
                             .iter()
-                            .rfind(|m| m.t_ns < at)
-                            .expect("joint states before the fault")
+                            .find(|m| m.seq == seq)
+                            .unwrap_or_else(|| panic!("joint state {seq} named by {fault}"))
                             .t_ns;
                         (at - last) as f64 * 1e-6
                     }
                     Stalled::Cell => {
                         assert!(fault.contains("watchdog"), "{fault}");
-                        // The watchdog counts from the last setpoint before its trip.
+                        // The watchdog counts from the last setpoint it applied, which the
+                        // trip's state names. Not the last one stamped before the trip: a
+                        // setpoint stamped just before SIGSTOP is published after SIGCONT.
                         let trip = s
                             .states
                             .iter()
@@ -586,8 +602,10 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
                         let last = s
                             .setpoints
                             .iter()
-                            .rfind(|m| m.t_ns < trip.t_ns)
-                            .expect("setpoints before the trip")
+                            .find(|m| m.seq == trip.setpoint_seq)
+                            .unwrap_or_else(|| {
+                                panic!("setpoint {} before the trip", trip.setpoint_seq)
+                            })
                             .t_ns;
                         (trip.t_ns - last) as f64 * 1e-6
                     }
