@@ -413,6 +413,37 @@ fn skill_plan_equals_the_brute_force_grid_when_nothing_is_feasible() {
     );
 }
 
+/// Calls `f(side, stance, grasp, skill, goal, rdmp)` for every pick and place candidate of
+/// every grasp of a task, in the planner's order.
+fn for_each_candidate(
+    rt: &Runtime<'_>,
+    sides: &PttSides<'_>,
+    mut f: impl FnMut(
+        &prf_runtime::skill_plan::Side<'_>,
+        usize,
+        usize,
+        usize,
+        &prf_shared::se3::Pose,
+        &prf_shared::rdmp::Rdmp,
+    ),
+) {
+    for side in [&sides.pick, &sides.place] {
+        for g in 0..sides.grasps {
+            let mut candidates = Vec::new();
+            side.candidates(rt, g, |s, k| {
+                candidates.push((s as usize, k as usize));
+                true
+            })
+            .unwrap();
+            for (s, k) in candidates {
+                if let (Some(goal), Ok(Some(rdmp))) = (side.goal(s, g), rt.skill_rdmp(k)) {
+                    f(side, s, g, k, goal, &rdmp);
+                }
+            }
+        }
+    }
+}
+
 /// Every candidate motion the planner can time ends on its goal, reused skills of other
 /// location types included (checked here on one task's every pick and place candidate, on
 /// the nominal cell and with the part 2 cm / 8° off its nominal pose). A run goes on past τ
@@ -428,45 +459,32 @@ fn every_timed_candidate_ends_on_its_goal() {
         let resolved = task.resolve(&rt).expect("blob").expect("feasible");
         let sides = PttSides::new(&rt, &task, &resolved, &PttClasses::of(&rt).unwrap()).unwrap();
         let (mut timed, mut others) = (0, 0);
-        for side in [&sides.pick, &sides.place] {
-            for g in 0..sides.grasps {
-                let mut candidates = Vec::new();
-                side.candidates(&rt, g, |s, k| {
-                    candidates.push((s as usize, k as usize));
-                    true
-                })
-                .unwrap();
-                for (s, k) in candidates {
-                    let (Some(goal), Ok(Some(rdmp))) = (side.goal(s, g), rt.skill_rdmp(k)) else {
-                        continue;
-                    };
-                    let base = &side.arm_bases[s];
-                    let e = evaluate_arm_motion(
-                        &rt,
-                        &rdmp,
-                        goal,
-                        &side.field,
-                        base,
-                        f64::INFINITY,
-                        usize::MAX,
-                    );
-                    match e {
-                        Evaluation::Risk { .. } => timed += 1,
-                        Evaluation::Missed {
-                            position, angle, ..
-                        } => panic!(
-                            "{}: skill {k} at stance {s}, grasp {g} ends {:.2} mm / {:.2} mrad off its goal (allowed {} mm / {} mrad)",
-                            ft.label(),
-                            position * 1e3,
-                            angle * 1e3,
-                            REACH_POSITION * 1e3,
-                            REACH_ANGLE * 1e3
-                        ),
-                        _ => others += 1,
-                    }
-                }
+        for_each_candidate(&rt, &sides, |side, s, g, k, goal, rdmp| {
+            let base = &side.arm_bases[s];
+            let e = evaluate_arm_motion(
+                &rt,
+                rdmp,
+                goal,
+                &side.field,
+                base,
+                f64::INFINITY,
+                usize::MAX,
+            );
+            match e {
+                Evaluation::Risk { .. } => timed += 1,
+                Evaluation::Missed {
+                    position, angle, ..
+                } => panic!(
+                    "{}: skill {k} at stance {s}, grasp {g} ends {:.2} mm / {:.2} mrad off its goal (allowed {} mm / {} mrad)",
+                    ft.label(),
+                    position * 1e3,
+                    angle * 1e3,
+                    REACH_POSITION * 1e3,
+                    REACH_ANGLE * 1e3
+                ),
+                _ => others += 1,
             }
-        }
+        });
         println!(
             "{}: {timed} candidates timed, all on their goal; {others} failed or too fast",
             ft.label()
@@ -479,6 +497,63 @@ fn every_timed_candidate_ends_on_its_goal() {
             timed + others
         );
     }
+}
+
+/// Issue 22: the timing's probe (the first steps at the largest time scale) calls a motion too
+/// fast only when the full ladder of time scales would: on every candidate of a task of the
+/// shifted cell where the probe fires on half of them, a motion the probe refuses
+/// is refused by the full ladder too (too fast, or at a joint limit in a run it need not
+/// take), and every other gets the same timing or error after the probe's steps.
+#[test]
+fn the_timing_probe_gives_the_ladders_verdict() {
+    use prf_shared::timing::{MAX_TIME_SCALE, PROBE_STEPS, TimingError, pace_observed};
+    let world = shifted_world(0.02, 8.0);
+    let rt = Runtime::load(full_blob()).expect("load");
+    let q0 = JointVector::from(rt.model.home);
+    let (mut same, mut probed_out, mut saved) = (0, 0, 0usize);
+    let ft = FloorTask::new(&world, "Part1", "Table1", "Table2").expect("task");
+    let task = ft.task();
+    let resolved = task.resolve(&rt).expect("blob").expect("feasible");
+    let sides = PttSides::new(&rt, &task, &resolved, &PttClasses::of(&rt).unwrap()).unwrap();
+    for_each_candidate(&rt, &sides, |_, s, g, k, goal, rdmp| {
+        let (m, l, c) = (&rt.model, &rt.limits, &rt.config.rdmp);
+        let pace = |probe| {
+            pace_observed(
+                m,
+                l,
+                c,
+                rdmp,
+                &q0,
+                goal,
+                usize::MAX,
+                probe,
+                || (),
+                |_, _| {},
+            )
+        };
+        let (with, without) = (pace(true), pace(false));
+        let at = format!("{}: skill {k} at stance {s}, grasp {g}", ft.label());
+        let fired = matches!(with.timing, Err(TimingError::TooFast { scale, .. }) if scale == MAX_TIME_SCALE)
+            && with.steps <= PROBE_STEPS;
+        if fired {
+            // Refused either way (too fast, or at a joint limit in a full run first).
+            assert!(without.timing.is_err(), "{at}: {:?}", without.timing);
+            probed_out += 1;
+            saved += without.steps.saturating_sub(with.steps);
+        } else {
+            assert_eq!(with.timing, without.timing, "{at}");
+            let extra = with.steps - without.steps;
+            assert!(extra <= PROBE_STEPS, "{at}: {extra} steps more");
+            same += 1;
+        }
+    });
+    println!(
+        "{same} candidates timed alike, {probed_out} too fast from the probe alone ({saved} steps saved)"
+    );
+    assert!(
+        probed_out >= 40 && same >= 100,
+        "{probed_out} probed out, {same} alike"
+    );
 }
 
 /// A planning budget: the search stops within it and brackets J* between what it knows not

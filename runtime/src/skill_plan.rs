@@ -300,6 +300,7 @@ pub fn evaluate_arm_motion_observed<S>(
         &q0,
         goal,
         cap,
+        true,
         || (RiskAccumulator::default(), true, Pose::identity(), fresh()),
         |(acc, below, last, state), kin| {
             *last = kin.tcp;

@@ -60,7 +60,8 @@ pub enum Run {
 
 /// Integrates `rdmp` (already time-scaled by `scale`) from `q0` to `goal` (arm base frame),
 /// rating its stream, and shows `observe` the kinematics of every configuration it emits,
-/// q0 first and the final one last.
+/// q0 first and the final one last, as long as the stream stays within the limits (a run
+/// that leaves them ends [`Run::TooFast`], and what it observed is of no use).
 #[allow(clippy::too_many_arguments)]
 pub fn run_at(
     model: &RobotModel,
@@ -82,12 +83,20 @@ pub fn run_at(
     let mut steps = 0;
     // The ratios last found hopeful: they only grow, and only a new peak needs a new look.
     let mut hopeful = None;
+    // Still within the limits: once not, the run is too fast whatever follows, and nothing
+    // more is shown to `observe` (a run that is not the rated one has no use for it).
+    let mut within = true;
     // Each step shows the FK of the configuration it leaves: q_0 … q_{n−1}; q_n comes last.
     loop {
         if steps >= cap {
             return Run::Capped;
         }
-        let q = match run.step_observed(model, rdmp, cfg, &mut observe) {
+        let step = if within {
+            run.step_observed(model, rdmp, cfg, &mut observe)
+        } else {
+            run.step(model, rdmp, cfg)
+        };
+        let q = match step {
             Ok(s) => s.q,
             Err(error) => return Run::Failed { error, steps },
         };
@@ -99,6 +108,7 @@ pub fn run_at(
                 return Run::TooFast { steps, ratios };
             }
             hopeful = Some(ratios);
+            within = ratios.within();
         }
         if steps >= nominal {
             if meter.stop_ratios().within() || steps >= 2 * nominal {
@@ -108,14 +118,14 @@ pub fn run_at(
         }
     }
     meter.stop();
-    let q: [f64; NA] = *meter.last();
-    observe(&ArmKinematics::new(model, &JointVector::from(q)));
     if !meter.ratios().within() {
         return Run::TooFast {
             steps,
             ratios: meter.ratios(),
         };
     }
+    let q: [f64; NA] = *meter.last();
+    observe(&ArmKinematics::new(model, &JointVector::from(q)));
     Run::Within(ArmTiming {
         scale,
         steps: steps as u32,
@@ -189,10 +199,22 @@ pub struct Paced<O> {
     pub steps: usize,
 }
 
+/// Steps of the probe run at [`MAX_TIME_SCALE`] that [`pace_observed`] takes first.
+pub const PROBE_STEPS: usize = 3;
+
 /// The smallest time scale on the ladder 1, [`next_scale`], … at which `rdmp` from `q0` to
 /// `goal` stays within `limits`, with its timing. Each run gets a `fresh()` observer that
 /// `observe` shows every configuration's kinematics. At most `cap` steps in all runs
 /// together ([`TimingError::Capped`] when they run out).
+///
+/// With `probe` (the planner's and the compiler's way), first the first [`PROBE_STEPS`] of
+/// the slowest run the ladder may try. The stream leaves rest there with the DMPs' initial
+/// accelerations, which fall as 1/s² with the time scale s (the first step's jerk, its
+/// displacement ÷ Δt³, with them): a stream that leaves the limits at [`MAX_TIME_SCALE`]
+/// within those steps leaves them at every faster scale too, so it is
+/// [`TimingError::TooFast`] without a full run per rung. (Without the probe such a motion
+/// takes a whole run at scale 1, its peak set in the first step, before the ladder learns
+/// it; a test checks that both come to the same verdict.)
 #[allow(clippy::too_many_arguments)]
 pub fn pace_observed<O>(
     model: &RobotModel,
@@ -202,11 +224,41 @@ pub fn pace_observed<O>(
     q0: &JointVector,
     goal: &Pose,
     cap: usize,
+    probe: bool,
     mut fresh: impl FnMut() -> O,
     mut observe: impl FnMut(&mut O, &ArmKinematics),
 ) -> Paced<O> {
-    let mut scale = 1.0;
     let mut steps = 0;
+    if probe {
+        let slowest = rdmp.time_scaled(MAX_TIME_SCALE);
+        let probe_cap = PROBE_STEPS.min(cap);
+        steps = match run_at(
+            model,
+            limits,
+            cfg,
+            &slowest,
+            q0,
+            goal,
+            MAX_TIME_SCALE,
+            probe_cap,
+            |_| {},
+        ) {
+            Run::TooFast { steps, ratios } => {
+                return Paced {
+                    timing: Err(TimingError::TooFast {
+                        scale: MAX_TIME_SCALE,
+                        ratios,
+                    }),
+                    observer: fresh(),
+                    steps,
+                };
+            }
+            Run::Within(t) => t.steps as usize,
+            Run::Failed { steps, .. } => steps,
+            Run::Capped => probe_cap,
+        };
+    }
+    let mut scale = 1.0;
     let mut trials = 0;
     loop {
         let mut observer = fresh();
@@ -265,6 +317,7 @@ pub fn pace(
         q0,
         goal,
         usize::MAX,
+        true,
         || (),
         |_, _| {},
     )

@@ -349,7 +349,7 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
         "ms"
     );
     let (mut total_ms, mut integrations, mut grid, mut feasible) = (0.0, 0u64, 0u64, 0);
-    let mut bounded = 0u64;
+    let (mut bounded, mut steps) = (0u64, 0u64);
     for (i, ft) in tasks.iter().enumerate() {
         let t0 = Instant::now();
         let result = plan(rt, &ft.task());
@@ -360,6 +360,7 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
                 let s = &p.skills;
                 integrations += s.stats.integrations as u64;
                 bounded += s.stats.bounded as u64;
+                steps += s.stats.steps;
                 grid += s.stats.grid_integrations;
                 feasible += s.feasible as usize;
                 let c = s.choice;
@@ -395,7 +396,7 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
         }
     }
     println!(
-        "{feasible}/{} physically feasible; planning {:.1} ms in total; {} RDMP integrations ({bounded} candidates skipped by their bound) against the paper's grid of {} ({:.0}× fewer)",
+        "{feasible}/{} physically feasible; planning {:.1} ms in total; {} RDMP integrations of {steps} steps ({bounded} candidates skipped by their bound) against the paper's grid of {} ({:.0}× fewer)",
         tasks.len(),
         total_ms,
         integrations,
