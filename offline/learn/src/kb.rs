@@ -20,8 +20,9 @@ use serde::{Deserialize, Serialize};
 
 /// The file's first bytes.
 pub const MAGIC: [u8; 6] = *b"PRF-KB";
-/// The layout of `LearnerState` this build reads and writes.
-pub const VERSION: u32 = 1;
+/// The layout of `LearnerState` this build reads and writes (2: the swept spheres, their keys
+/// and the splat as byte strings of [`Record`]s).
+pub const VERSION: u32 = 2;
 const HEADER: usize = 6 + 4 + 8 + 4;
 
 /// Why a knowledge-base file cannot be read.
@@ -203,8 +204,10 @@ pub(crate) struct AffordanceState {
 /// A [`crate::workspace::Sweep`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub(crate) struct SweepState {
+    #[serde(with = "records")]
     pub spheres: Vec<([f64; 3], f64)>,
-    pub seen: Vec<(i32, i32, i32, u8)>,
+    #[serde(with = "records")]
+    pub seen: Vec<crate::workspace::SeenKey>,
     pub feature_spacing: f64,
     pub features: Vec<([f64; 3], f64)>,
     pub splat: Option<SplatState>,
@@ -216,7 +219,9 @@ pub(crate) struct SplatState {
     pub origin: [f64; 3],
     pub dims: [usize; 3],
     pub grid: [f64; 3],
+    #[serde(with = "records")]
     pub value: Vec<f64>,
+    #[serde(with = "records")]
     pub feature: Vec<u32>,
     pub done: usize,
 }
@@ -307,16 +312,107 @@ impl RdmpState {
     }
 }
 
+/// A fixed-size record of the knowledge base's long arrays, little-endian. Such an array is
+/// written as one byte string ([`records`]), not element by element: the example cell's
+/// 1.2 M swept spheres encode and decode in milliseconds instead of a tenth of a second.
+pub(crate) trait Record: Sized {
+    const SIZE: usize;
+    fn put(&self, out: &mut Vec<u8>);
+    /// The record of `SIZE` bytes.
+    fn get(b: &[u8]) -> Self;
+}
+
+fn f64_at(b: &[u8], i: usize) -> f64 {
+    f64::from_le_bytes(core::array::from_fn(|k| b[8 * i + k]))
+}
+
+impl Record for ([f64; 3], f64) {
+    const SIZE: usize = 32;
+    fn put(&self, out: &mut Vec<u8>) {
+        for v in self.0.iter().chain([&self.1]) {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    fn get(b: &[u8]) -> Self {
+        ([f64_at(b, 0), f64_at(b, 1), f64_at(b, 2)], f64_at(b, 3))
+    }
+}
+
+impl Record for (i32, i32, i32, u8) {
+    const SIZE: usize = 13;
+    fn put(&self, out: &mut Vec<u8>) {
+        for v in [self.0, self.1, self.2] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.push(self.3);
+    }
+    fn get(b: &[u8]) -> Self {
+        let i = |k: usize| i32::from_le_bytes(core::array::from_fn(|n| b[4 * k + n]));
+        (i(0), i(1), i(2), b[12])
+    }
+}
+
+impl Record for f64 {
+    const SIZE: usize = 8;
+    fn put(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+    fn get(b: &[u8]) -> Self {
+        f64_at(b, 0)
+    }
+}
+
+impl Record for u32 {
+    const SIZE: usize = 4;
+    fn put(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+    fn get(b: &[u8]) -> Self {
+        u32::from_le_bytes(core::array::from_fn(|k| b[k]))
+    }
+}
+
+/// `#[serde(with = "records")]`: a `Vec` of [`Record`]s as one byte string.
+mod records {
+    use super::Record;
+    use serde::de::Error;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer, T: Record>(items: &[T], s: S) -> Result<S::Ok, S::Error> {
+        let mut out = Vec::with_capacity(items.len() * T::SIZE);
+        for r in items {
+            r.put(&mut out);
+        }
+        s.serialize_bytes(&out)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>, T: Record>(d: D) -> Result<Vec<T>, D::Error> {
+        let b = <&[u8]>::deserialize(d)?;
+        if b.len() % T::SIZE != 0 {
+            return Err(D::Error::custom(format!(
+                "an array of {} bytes is not made of {}-byte records",
+                b.len(),
+                T::SIZE
+            )));
+        }
+        Ok(b.chunks_exact(T::SIZE).map(T::get).collect())
+    }
+}
+
 /// The file of a learner's state.
 pub(crate) fn encode(state: &LearnerState) -> Vec<u8> {
-    // Plain data of Vecs and numbers: postcard cannot fail on it.
-    let payload = postcard::to_allocvec(state).unwrap_or_default();
-    let mut out = Vec::with_capacity(HEADER + payload.len());
-    out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    out.extend_from_slice(&crc32(&payload).to_le_bytes());
-    out.extend_from_slice(&payload);
+    // Straight after the header, the length and CRC-32 filled in after: no second copy.
+    let mut out = Vec::from([0; HEADER]);
+    out[..6].copy_from_slice(&MAGIC);
+    out[6..10].copy_from_slice(&VERSION.to_le_bytes());
+    // Plain data of Vecs and numbers: postcard cannot fail on it (nor on a Vec's Extend).
+    out = postcard::to_extend(state, out).unwrap_or_default();
+    let payload = out.len().saturating_sub(HEADER);
+    let crc = crc32(out.get(HEADER..).unwrap_or_default());
+    if let Some(h) = out.get_mut(10..HEADER) {
+        h[..8].copy_from_slice(&(payload as u64).to_le_bytes());
+        h[8..].copy_from_slice(&crc.to_le_bytes());
+    }
     out
 }
 

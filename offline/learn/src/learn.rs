@@ -3,7 +3,7 @@
 
 use crate::affordance::AffordanceSet;
 use crate::skills::{self, ArmSkill, Skill};
-use crate::workspace::{self, LearnedField, PathSphere, Sweep, WorkspaceConfig};
+use crate::workspace::{self, LearnedField, PathSphere, Sweep, SweptPath, WorkspaceConfig};
 use prf_files::dataset::{Dataset, Demonstration, Placed};
 use prf_files::{OnProgress, Progress};
 use prf_shared::JointVector;
@@ -96,7 +96,7 @@ pub struct Lesson {
     part_type: usize,
     affordance: Option<(Frame, Pose)>,
     /// The instance's robot spheres in the location frame, in sweep order.
-    sweep: Option<Arc<Vec<PathSphere>>>,
+    sweep: Option<Arc<SweptPath>>,
     arm: Option<(Vec<[f64; 7]>, f64, prf_shared::rdmp::Rdmp)>,
 }
 
@@ -252,12 +252,12 @@ fn lessons(
                             .map(|s| s.arm)
                             .collect();
                         let base = loc.inverse() * arm_base_pose(model, s.base);
-                        Some(Arc::new(Sweep::path_spheres(
+                        Some(Arc::new(SweptPath::new(Sweep::path_spheres(
                             model,
                             &base,
                             &path,
                             cfg.workspace.resample,
-                        )))
+                        ))))
                     }
                     _ => None,
                 }
@@ -396,7 +396,7 @@ pub struct Learner {
     part_types: Vec<PartTypeKnowledge>,
     sweeps: Vec<Sweep>,
     /// Per location type, the spheres added since the last field build, in order.
-    pending: Vec<Vec<Arc<Vec<PathSphere>>>>,
+    pending: Vec<Vec<Arc<SweptPath>>>,
     arms: Vec<ArmSkill>,
     /// K before share().
     skills: Vec<Skill>,
@@ -614,7 +614,12 @@ impl Learner {
                 .iter()
                 .map(|per| {
                     per.iter()
-                        .map(|path| path.iter().map(|s| (v(&s.centre), s.sphere)).collect())
+                        .map(|path| {
+                            path.spheres
+                                .iter()
+                                .map(|s| (v(&s.centre), s.sphere))
+                                .collect()
+                        })
                         .collect()
                 })
                 .collect(),
@@ -780,14 +785,14 @@ impl Learner {
                 .map(|per| {
                     per.into_iter()
                         .map(|path| {
-                            Arc::new(
+                            Arc::new(SweptPath::new(
                                 path.into_iter()
                                     .map(|(c, sphere)| PathSphere {
                                         centre: v(c),
                                         sphere,
                                     })
                                     .collect(),
-                            )
+                            ))
                         })
                         .collect()
                 })
@@ -813,9 +818,9 @@ impl Learner {
             .enumerate()
             .filter(|(_, (_, pending))| !pending.is_empty())
             .map(|(t, (sweep, pending))| {
-                for spheres in pending.drain(..) {
-                    sweep.add_spheres(robot, &spheres);
-                }
+                let paths: Vec<&SweptPath> = pending.iter().map(|p| p.as_ref()).collect();
+                sweep.add_spheres(robot, &paths);
+                pending.clear();
                 let f = workspace::build_field(sweep, &wc);
                 progress(Progress::Done(1));
                 (t, f)

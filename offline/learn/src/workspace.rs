@@ -85,7 +85,8 @@ pub struct PathSphere {
 #[derive(Clone, Debug)]
 pub struct Sweep {
     pub spheres: Vec<SphereSample>,
-    seen: FxHashSet<(i32, i32, i32, u8)>,
+    /// The [`SeenKey`]s of `spheres`, sorted.
+    seen: Vec<SeenKey>,
     /// Feature-ball spacing, m ([`WorkspaceConfig::feature_spacing`]).
     feature_spacing: f64,
     /// The thinned spheres (centre, r_j): every sphere whose centre is not within the
@@ -110,7 +111,7 @@ impl Sweep {
     pub fn new(feature_spacing: f64) -> Self {
         Sweep {
             spheres: Vec::new(),
-            seen: FxHashSet::default(),
+            seen: Vec::new(),
             feature_spacing,
             features: Vec::new(),
             kept: FxHashSet::default(),
@@ -122,7 +123,8 @@ impl Sweep {
     /// Adds the spheres of a configuration path (`arm` joint samples, arm base at
     /// `arm_base` in the location frame), re-sampled so no centre moves more than `step`.
     pub fn add_path(&mut self, model: &RobotModel, arm_base: &Pose, arm: &[[f64; 7]], step: f64) {
-        self.add_spheres(model, &Self::path_spheres(model, arm_base, arm, step));
+        let path = SweptPath::new(Self::path_spheres(model, arm_base, arm, step));
+        self.add_spheres(model, &[&path]);
     }
 
     /// The spheres [`Sweep::add_path`] adds, in the order it adds them, before
@@ -182,7 +184,7 @@ impl Sweep {
                 .iter()
                 .map(|s| (v(&s.centre), s.radius))
                 .collect(),
-            seen: sorted(self.seen.iter().copied()),
+            seen: self.seen.clone(),
             feature_spacing: self.feature_spacing,
             features: self.features.iter().map(|(c, r)| (v(c), *r)).collect(),
             splat: self.splat.as_ref().map(|s| crate::kb::SplatState {
@@ -226,7 +228,15 @@ impl Sweep {
                     radius,
                 })
                 .collect(),
-            seen: s.seen.into_iter().collect(),
+            seen: {
+                // Sorted and unique as written; a file that is not gets its set restored.
+                let mut seen = s.seen;
+                if !seen.is_sorted_by(|a, b| a < b) {
+                    seen.sort_unstable();
+                    seen.dedup();
+                }
+                seen
+            },
             feature_spacing: s.feature_spacing,
             // Derived: one key per feature ball (a ball is kept iff its key is new).
             kept: s
@@ -257,27 +267,108 @@ impl Sweep {
         }
     }
 
-    /// Adds spheres (from [`Sweep::path_spheres`]) not seen yet.
-    pub fn add_spheres(&mut self, model: &RobotModel, spheres: &[PathSphere]) {
-        for s in spheres {
-            let p = s.centre;
-            // Re-visited configurations (the reversal, repeated programs) add nothing new.
-            let key = (
-                (p.x / 2e-4).round() as i32,
-                (p.y / 2e-4).round() as i32,
-                (p.z / 2e-4).round() as i32,
-                s.sphere,
-            );
-            if self.seen.insert(key) {
-                let radius = model.spheres[s.sphere as usize].radius;
-                self.spheres.push(SphereSample { centre: p, radius });
-                if self
-                    .kept
-                    .insert(feature_key(&p, radius, self.feature_spacing))
-                {
-                    self.features.push((p, radius));
-                }
+    /// Adds the spheres of `paths` not seen yet, in their order: a sphere is new when no
+    /// earlier one (kept, or before it in `paths`) has its [`SeenKey`]. The paths' keys come
+    /// sorted ([`SweptPath`]): they are merged with each other and with the kept ones in
+    /// sequential passes, instead of a hash lookup per sphere (a cache miss each, 0.2 µs).
+    pub fn add_spheres(&mut self, model: &RobotModel, paths: &[&SweptPath]) {
+        // Every path's first sphere per key, indexed across `paths`; the stable sort merges
+        // the sorted runs and keeps equal keys in path order, so the first is the earliest.
+        let mut fresh: Vec<(SeenKey, u32)> = Vec::new();
+        let mut starts = Vec::with_capacity(paths.len());
+        for p in paths {
+            let start = fresh_start(&starts, paths);
+            starts.push(start);
+            fresh.extend(p.keys.iter().map(|&(k, i)| (k, start + i)));
+        }
+        fresh.sort_by_key(|e| e.0);
+        fresh.dedup_by_key(|e| e.0);
+        let mut seen = self.seen.iter().peekable();
+        fresh.retain(|(k, _)| {
+            while seen.next_if(|s| *s < k).is_some() {}
+            seen.peek() != Some(&k)
+        });
+        let keys: Vec<SeenKey> = fresh.iter().map(|e| e.0).collect();
+        insert_sorted(&mut self.seen, &keys);
+        // Re-visited configurations (the reversal, repeated programs) add nothing new.
+        fresh.sort_unstable_by_key(|e| e.1);
+        let mut p = 0;
+        for &(_, i) in &fresh {
+            while starts.get(p + 1).is_some_and(|s| *s <= i) {
+                p += 1;
             }
+            let s = &paths[p].spheres[(i - starts[p]) as usize];
+            let (c, radius) = (s.centre, model.spheres[s.sphere as usize].radius);
+            self.spheres.push(SphereSample { centre: c, radius });
+            if self
+                .kept
+                .insert(feature_key(&c, radius, self.feature_spacing))
+            {
+                self.features.push((c, radius));
+            }
+        }
+    }
+}
+
+/// The index across `paths` of the first sphere of the path after those `starts` holds.
+fn fresh_start(starts: &[u32], paths: &[&SweptPath]) -> u32 {
+    match starts.last() {
+        Some(s) => s + paths[starts.len() - 1].spheres.len() as u32,
+        None => 0,
+    }
+}
+
+/// The swept spheres of one instance (from [`Sweep::path_spheres`]) and, sorted, each of
+/// their [`SeenKey`]s with the index of its first sphere: the de-duplication within the path,
+/// done once with the demonstration's lessons rather than at each [`Sweep::add_spheres`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweptPath {
+    pub spheres: Vec<PathSphere>,
+    keys: Vec<(SeenKey, u32)>,
+}
+
+impl SweptPath {
+    pub fn new(spheres: Vec<PathSphere>) -> Self {
+        // A sphere whose key is its predecessor's (the same robot sphere one configuration
+        // earlier: near the base, or at rest) is a duplicate before any sorting.
+        let mut last = [None; 256];
+        let mut keys: Vec<(SeenKey, u32)> = Vec::with_capacity(spheres.len());
+        for (i, s) in spheres.iter().enumerate() {
+            let key = seen_key(s);
+            if last[s.sphere as usize].replace(key) != Some(key) {
+                keys.push((key, i as u32));
+            }
+        }
+        keys.sort_unstable();
+        keys.dedup_by_key(|e| e.0);
+        SweptPath { spheres, keys }
+    }
+}
+
+/// The de-duplication key of a swept sphere: its centre on a 0.2 mm grid and its index.
+pub(crate) type SeenKey = (i32, i32, i32, u8);
+
+/// [`SeenKey`] of `s`.
+fn seen_key(s: &PathSphere) -> SeenKey {
+    let k = |v: f64| (v / 2e-4).round() as i32;
+    (k(s.centre.x), k(s.centre.y), k(s.centre.z), s.sphere)
+}
+
+/// Inserts the sorted keys `new`, none of them in the sorted `seen`, in place: merged from
+/// the back, so only the keys after the first insertion move and no new array is allocated.
+fn insert_sorted(seen: &mut Vec<SeenKey>, new: &[SeenKey]) {
+    let n = seen.len();
+    seen.resize(n + new.len(), (0, 0, 0, 0));
+    // seen[..i] and new[..j] are still to be placed, before seen[i + j..].
+    let (mut i, mut j) = (n, new.len());
+    while j > 0 {
+        let w = i + j - 1;
+        if i > 0 && seen[i - 1] > new[j - 1] {
+            seen[w] = seen[i - 1];
+            i -= 1;
+        } else {
+            seen[w] = new[j - 1];
+            j -= 1;
         }
     }
 }
@@ -287,13 +378,6 @@ impl Sweep {
 fn feature_key(p: &Vector3<f64>, radius: f64, spacing: f64) -> (i64, i64, i64, i64) {
     let k = |v: f64| (v / spacing).round() as i64;
     (k(p.x), k(p.y), k(p.z), (radius * 1e4) as i64)
-}
-
-/// The items in order (a set written the same way every time).
-fn sorted<T: Ord>(items: impl Iterator<Item = T>) -> Vec<T> {
-    let mut v: Vec<T> = items.collect();
-    v.sort_unstable();
-    v
 }
 
 /// The encoded field of one workspace and figures about it.
@@ -522,4 +606,85 @@ fn encode_node(v: &Vector3<f64>, value: f64, ball: Option<(Vector3<f64>, f64)>) 
     let mm = (value / MM).ceil().clamp(i16::MIN as f64, i16::MAX as f64) as i16;
     let b = mm.to_le_bytes();
     [b[0], b[1], 0, 0]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use std::collections::HashSet;
+
+    /// The de-duplication as it was specified: one sphere at a time, each looked up in a hash
+    /// set of the keys added before it.
+    fn one_by_one(
+        model: &RobotModel,
+        sweep: &mut Sweep,
+        seen: &mut HashSet<SeenKey>,
+        p: &[PathSphere],
+    ) {
+        for s in p {
+            if seen.insert(seen_key(s)) {
+                let radius = model.spheres[s.sphere as usize].radius;
+                sweep.spheres.push(SphereSample {
+                    centre: s.centre,
+                    radius,
+                });
+                if sweep
+                    .kept
+                    .insert(feature_key(&s.centre, radius, sweep.feature_spacing))
+                {
+                    sweep.features.push((s.centre, radius));
+                }
+            }
+        }
+    }
+
+    /// Paths that revisit each other's spheres (and their own, often at once) on the 0.2 mm
+    /// key grid, with keys that differ in one coordinate or in the sphere only, added in
+    /// batches of several paths: the sorted merges keep exactly the spheres, features and keys
+    /// of the one-by-one lookups, in the same order.
+    #[test]
+    fn merged_keys_keep_what_one_by_one_lookups_keep() {
+        let model = prf_files::robot::example().unwrap();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let (mut sorted, mut reference) = (Sweep::default(), Sweep::default());
+        let mut seen = HashSet::new();
+        for batch in 0..40 {
+            let paths: Vec<SweptPath> = (0..rng.random_range(1..4))
+                .map(|_| {
+                    let n = rng.random_range(0..400);
+                    // The last grid point per sphere: a third of the spheres stay on it (the
+                    // robot near its base or at rest), with a different centre in the cell.
+                    let mut at = [[0i32; 3]; 3];
+                    let mut spheres = Vec::new();
+                    for _ in 0..n {
+                        let sphere = rng.random_range(0..3u8);
+                        let at = &mut at[sphere as usize];
+                        if rng.random_bool(0.67) {
+                            *at = core::array::from_fn(|_| rng.random_range(-6..6));
+                        }
+                        let mut c = || rng.random_range(-0.4..0.4) * 2e-4;
+                        let centre = Vector3::new(
+                            at[0] as f64 * 2e-4 + c(),
+                            at[1] as f64 * 2e-4 + c(),
+                            at[2] as f64 * 2e-4 + c(),
+                        );
+                        spheres.push(PathSphere { centre, sphere });
+                    }
+                    SweptPath::new(spheres)
+                })
+                .collect();
+            sorted.add_spheres(&model, &paths.iter().collect::<Vec<_>>());
+            for p in &paths {
+                one_by_one(&model, &mut reference, &mut seen, &p.spheres);
+            }
+            assert_eq!(sorted.spheres, reference.spheres, "batch {batch}");
+            assert_eq!(sorted.features, reference.features, "batch {batch}");
+            let mut keys: Vec<SeenKey> = seen.iter().copied().collect();
+            keys.sort_unstable();
+            assert_eq!(sorted.seen, keys, "batch {batch}");
+        }
+        // The key grid is 12³ × 3 spheres: most later spheres are duplicates.
+        assert!(sorted.spheres.len() > 1000 && sorted.spheres.len() < 12 * 12 * 12 * 3);
+    }
 }
