@@ -275,11 +275,11 @@ impl Sweep {
         // Every path's first sphere per key, indexed across `paths`; the stable sort merges
         // the sorted runs and keeps equal keys in path order, so the first is the earliest.
         let mut fresh: Vec<(SeenKey, u32)> = Vec::new();
-        let mut starts = Vec::with_capacity(paths.len());
+        let (mut starts, mut start) = (Vec::with_capacity(paths.len()), 0);
         for p in paths {
-            let start = fresh_start(&starts, paths);
             starts.push(start);
             fresh.extend(p.keys.iter().map(|&(k, i)| (k, start + i)));
+            start += p.spheres.len() as u32;
         }
         fresh.sort_by_key(|e| e.0);
         fresh.dedup_by_key(|e| e.0);
@@ -307,14 +307,6 @@ impl Sweep {
                 self.features.push((c, radius));
             }
         }
-    }
-}
-
-/// The index across `paths` of the first sphere of the path after those `starts` holds.
-fn fresh_start(starts: &[u32], paths: &[&SweptPath]) -> u32 {
-    match starts.last() {
-        Some(s) => s + paths[starts.len() - 1].spheres.len() as u32,
-        None => 0,
     }
 }
 
