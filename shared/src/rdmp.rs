@@ -17,7 +17,7 @@
 //! limits and non-finite values stop integration with a typed [`RdmpError`].
 
 use crate::dmp::{
-    DmpError, DmpParams, Forcing, MAX_BASES, MIN_SAMPLES, Phase, PositionDmp, PositionState,
+    Ahead, DmpError, DmpParams, Forcing, MAX_BASES, MIN_SAMPLES, Phase, PositionDmp, PositionState,
     RotationDmp, RotationState,
 };
 use crate::kinematics::ArmKinematics;
@@ -303,6 +303,9 @@ pub struct RdmpRun {
     rotation: RotationState,
     gamma: PositionState<1>,
     phase: Phase,
+    /// Position's, rotation's and γ's f(ζ_{k+1}) of the last step ([`Forcing::current`]); not
+    /// in a checkpoint (a resumed run evaluates its first f(ζ_k), to the same bits).
+    ahead: (Ahead<3>, Ahead<3>, Ahead<1>),
     gamma_measured: f64,
     /// (M, q) of the previous step, for the trapezoid γ measurement.
     previous: Option<(JointVector, JointVector)>,
@@ -354,6 +357,7 @@ impl RdmpRun {
             rotation: c.rotation,
             gamma: c.gamma,
             phase,
+            ahead: (None, None, None),
             gamma_measured: c.gamma_measured,
             previous: c.previous,
         })
@@ -368,6 +372,7 @@ impl RdmpRun {
         self.position = c.position;
         self.rotation = c.rotation;
         self.gamma = c.gamma;
+        self.ahead = (None, None, None);
         self.gamma_measured = c.gamma_measured;
         self.previous = c.previous;
     }
@@ -403,6 +408,7 @@ impl RdmpRun {
             rotation,
             gamma,
             phase,
+            ahead: (None, None, None),
             gamma_measured: 0.0,
             previous: None,
         })
@@ -472,11 +478,13 @@ impl RdmpRun {
         // Work on copies and commit only on success: a refused step leaves the run unchanged.
         let (e_p, e_r) = pose_error(&self.dmp_pose(), &kin.tcp);
         let (mut position, mut rotation, mut gamma) = (self.position, self.rotation, self.gamma);
+        let mut ahead = self.ahead;
         let gamma_dmp = gamma.y[0];
         let (pp, rp, gp) = (&rdmp.position, &rdmp.rotation, &rdmp.gamma);
-        let v = position.step(&pp.params, &pp.forcing, pp.tau, cfg.dt, &self.phase);
-        let w = rotation.step(&rp.params, &rp.forcing, rp.tau, cfg.dt, &self.phase);
-        let g = gamma.step(&gp.params, &gp.forcing, gp.tau, cfg.dt, &self.phase);
+        let phase = &self.phase;
+        let v = position.step(&pp.params, &pp.forcing, pp.tau, cfg.dt, phase, &mut ahead.0);
+        let w = rotation.step(&rp.params, &rp.forcing, rp.tau, cfg.dt, phase, &mut ahead.1);
+        let g = gamma.step(&gp.params, &gp.forcing, gp.tau, cfg.dt, phase, &mut ahead.2);
         let twist = join(&(v + e_p * cfg.gain), &(w + e_r * cfg.gain));
         let (ker, pinv) = qr.kernel_and_pinv(&twist);
         let mut gamma_measured = self.gamma_measured;
@@ -502,6 +510,7 @@ impl RdmpRun {
         self.position = position;
         self.rotation = rotation;
         self.gamma = gamma;
+        self.ahead = ahead;
         self.phase.advance();
         self.gamma_measured = gamma_measured;
         self.previous = Some((ker.direction, self.q));

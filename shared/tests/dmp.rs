@@ -182,8 +182,16 @@ fn a_run_past_tau_stays_on_its_goal_with_bounded_jerk() {
         assert_eq!(phase.n_steps, end);
         phase.n_steps = 2 * end;
         let mut y = vec![state.y];
+        let mut ahead = None;
         while !phase.finished() {
-            state.step(&dmp.params, &dmp.forcing, dmp.tau, RUN_DT, &phase);
+            state.step(
+                &dmp.params,
+                &dmp.forcing,
+                dmp.tau,
+                RUN_DT,
+                &phase,
+                &mut ahead,
+            );
             phase.advance();
             y.push(state.y);
         }
@@ -305,4 +313,65 @@ fn phase_features_in_place_equal_fresh_evaluations() {
         0,
         "the fade ends with no basis active"
     );
+}
+
+/// Heun's corrector evaluates f(ζ_{k+1}) and the next step reuses it as its f(ζ_k): runs
+/// that carry it equal, bit for bit, runs that evaluate every f afresh (`ahead` emptied before
+/// each step), for position and rotation, past τ into the fade, and after the phase seeks back
+/// in the middle of a run (a resume: the carried value is then for another step and evaluated
+/// anew).
+#[test]
+fn the_carried_forcing_value_equals_a_fresh_evaluation_bit_for_bit() {
+    let position = train_position();
+    let rotation = RotationDmp::train(&DmpParams::default(), DEMO_DT, 201, |k| {
+        demo_rotation(k as f64 * DEMO_DT)
+    })
+    .unwrap();
+    let goal = demo_point(2.0) + Vector3::new(0.04, -0.02, 0.03);
+    let r_goal = exp(&Vector3::new(0.1, -0.2, 0.05)) * demo_rotation(2.0);
+    let (p0, mut phase) = position.start(&demo_point(0.0), &goal, RUN_DT).unwrap();
+    let (r0, _) = rotation
+        .start(&demo_rotation(0.0), &r_goal, RUN_DT)
+        .unwrap();
+    phase.n_steps *= 2;
+    let (mut carried, mut fresh) = ((p0, r0), (p0, r0));
+    let (mut ahead_p, mut ahead_r) = (None, None);
+    let (mut sought, mut at_900) = (false, (0.0, 0.0));
+    while !phase.finished() {
+        if phase.step == 900 {
+            at_900 = (phase.zeta, phase.zeta_next);
+        }
+        let (pp, rp) = (&position, &rotation);
+        let vc = carried.0.step(
+            &pp.params,
+            &pp.forcing,
+            pp.tau,
+            RUN_DT,
+            &phase,
+            &mut ahead_p,
+        );
+        let wc = carried.1.step(
+            &rp.params,
+            &rp.forcing,
+            rp.tau,
+            RUN_DT,
+            &phase,
+            &mut ahead_r,
+        );
+        let vf = fresh
+            .0
+            .step(&pp.params, &pp.forcing, pp.tau, RUN_DT, &phase, &mut None);
+        let wf = fresh
+            .1
+            .step(&rp.params, &rp.forcing, rp.tau, RUN_DT, &phase, &mut None);
+        assert_eq!((vc, wc), (vf, wf), "step {}", phase.step);
+        assert_eq!(carried, fresh, "step {}", phase.step);
+        phase.advance();
+        if phase.step == 1500 && !sought {
+            // Back to step 900 (its phase; the states go on from step 1500's).
+            sought = true;
+            phase.seek(900, at_900.0, at_900.1);
+        }
+    }
+    assert!(sought && ahead_p.is_some() && ahead_r.is_some());
 }

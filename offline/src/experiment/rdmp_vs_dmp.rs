@@ -334,8 +334,9 @@ fn dmp_trajectory(
     };
     let mut rater = Rater::new(model, field, arm_base);
     rater.add(0, &state.y);
+    let mut ahead = None;
     while !phase.finished() {
-        state.step(&dmp.params, &dmp.forcing, dmp.tau, dt, &phase);
+        state.step(&dmp.params, &dmp.forcing, dmp.tau, dt, &phase, &mut ahead);
         phase.advance();
         rater.add(phase.step, &state.y);
     }

@@ -4,6 +4,10 @@ use super::{DmpError, DmpParams, MAX_BASES, phase::Basis, phase::Features};
 use crate::linalg::{cholesky_factor, cholesky_solve};
 use nalgebra::SVector;
 
+/// The f(ζ_{k+1}) a step evaluated (Heun's corrector) and its k + 1, kept for the next step's
+/// f(ζ_k) ([`Forcing::current`]). None: evaluate it.
+pub type Ahead<const N: usize> = Option<(usize, SVector<f64, N>)>;
+
 /// Trained forcing weights of an N-dimensional DMP.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Forcing<const N: usize> {
@@ -28,6 +32,23 @@ impl<const N: usize> Forcing<N> {
             f[c] = if self.scaled[c] { s * amplitude[c] } else { s };
         }
         f
+    }
+
+    /// f(ζ_k) at the phase's step k: the value `ahead` holds when it is for this step (the
+    /// previous step's corrector evaluated the same features φ(ζ_k), which the phase keeps
+    /// unchanged: the same bits), else evaluated. A phase moved elsewhere
+    /// ([`super::Phase::seek`]) has another step, and `None` always evaluates.
+    #[inline]
+    pub fn current(
+        &self,
+        phase: &super::Phase,
+        amplitude: &SVector<f64, N>,
+        ahead: Ahead<N>,
+    ) -> SVector<f64, N> {
+        match ahead {
+            Some((k, f)) if k == phase.step => f,
+            _ => self.eval(phase.current(), amplitude),
+        }
     }
 
     /// Least-squares fit of the weights to forcing targets f_k at phases ζ_k (ridge

@@ -16,7 +16,7 @@ pub mod phase;
 pub mod position;
 pub mod rotation;
 
-pub use forcing::Forcing;
+pub use forcing::{Ahead, Forcing};
 pub use phase::{Basis, Features, Phase};
 pub use position::{PositionDmp, PositionState};
 pub use rotation::{RotationDmp, RotationState};

@@ -1,6 +1,6 @@
 //! Position DMPs in R^N (Eq. 1): τż = α_z(β_z(g − y) − z) + f(ζ), τẏ = z.
 
-use super::forcing::Forcing;
+use super::forcing::{Ahead, Forcing};
 use super::phase::{Basis, Phase};
 use super::{DmpError, DmpParams, check_demo, sample_derivatives, spring};
 use nalgebra::SVector;
@@ -88,8 +88,16 @@ impl<const N: usize> PositionDmp<N> {
             return Err(DmpError::BufferTooSmall { need });
         }
         out[0] = state.y;
+        let mut ahead = None;
         while !phase.finished() {
-            state.step(&self.params, &self.forcing, self.tau, dt, &phase);
+            state.step(
+                &self.params,
+                &self.forcing,
+                self.tau,
+                dt,
+                &phase,
+                &mut ahead,
+            );
             phase.advance();
             out[phase.step] = state.y;
         }
@@ -109,7 +117,7 @@ impl<const N: usize> PositionState<N> {
     }
 
     /// One Heun step from phase ζ_k to ζ_{k+1}; returns the mean velocity ẏ over the step, so
-    /// that y_{k+1} = y_k + Δt·ẏ exactly.
+    /// that y_{k+1} = y_k + Δt·ẏ exactly. `ahead` carries f(ζ_{k+1}) to the next step.
     #[inline]
     pub fn step(
         &mut self,
@@ -118,12 +126,14 @@ impl<const N: usize> PositionState<N> {
         tau: f64,
         dt: f64,
         phase: &Phase,
+        ahead: &mut Ahead<N>,
     ) -> SVector<f64, N> {
         let h = dt / tau;
-        let f1 = forcing.eval(phase.current(), &self.amplitude);
+        let f1 = forcing.current(phase, &self.amplitude, *ahead);
         let zd1 = spring(p, &(self.goal - self.y), &self.z, &f1);
         let (y_pred, z_pred) = (self.y + self.z * h, self.z + zd1 * h);
         let f2 = forcing.eval(phase.next(), &self.amplitude);
+        *ahead = Some((phase.step + 1, f2));
         let zd2 = spring(p, &(self.goal - y_pred), &z_pred, &f2);
         let vel = (self.z + z_pred) * (0.5 / tau);
         self.y += vel * dt;

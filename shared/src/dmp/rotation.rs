@@ -6,7 +6,7 @@
 //! way round. The initial error of a new integration is taken on the branch closest to the
 //! demonstrated travel.
 
-use super::forcing::Forcing;
+use super::forcing::{Ahead, Forcing};
 use super::phase::{Basis, Phase};
 use super::{DmpError, DmpParams, check_demo, sample_derivatives, spring};
 use crate::se3::{Rot, exp, log, log_near};
@@ -112,8 +112,16 @@ impl RotationDmp {
             return Err(DmpError::BufferTooSmall { need });
         }
         out[0] = state.r;
+        let mut ahead = None;
         while !phase.finished() {
-            state.step(&self.params, &self.forcing, self.tau, dt, &phase);
+            state.step(
+                &self.params,
+                &self.forcing,
+                self.tau,
+                dt,
+                &phase,
+                &mut ahead,
+            );
             phase.advance();
             out[phase.step] = state.r;
         }
@@ -135,7 +143,8 @@ impl RotationState {
     }
 
     /// One Heun step on SO(3) from ζ_k to ζ_{k+1}; returns the mean angular velocity ω over
-    /// the step, so that R_{k+1} = exp(Δt·ω) R_k exactly.
+    /// the step, so that R_{k+1} = exp(Δt·ω) R_k exactly. `ahead` carries f(ζ_{k+1}) to the
+    /// next step.
     #[inline]
     pub fn step(
         &mut self,
@@ -144,15 +153,17 @@ impl RotationState {
         tau: f64,
         dt: f64,
         phase: &Phase,
+        ahead: &mut Ahead<3>,
     ) -> Vector3<f64> {
         let h = dt / tau;
         let e1 = log_near(&(self.goal * self.r.inverse()), &self.error);
-        let f1 = forcing.eval(phase.current(), &self.amplitude);
+        let f1 = forcing.current(phase, &self.amplitude, *ahead);
         let etad1 = spring(p, &e1, &self.eta, &f1);
         let r_pred = exp(&(self.eta * h)) * self.r;
         let eta_pred = self.eta + etad1 * h;
         let e2 = log_near(&(self.goal * r_pred.inverse()), &e1);
         let f2 = forcing.eval(phase.next(), &self.amplitude);
+        *ahead = Some((phase.step + 1, f2));
         let etad2 = spring(p, &e2, &eta_pred, &f2);
         let omega = (self.eta + eta_pred) * (0.5 / tau);
         self.r = exp(&(omega * dt)) * self.r;
