@@ -315,6 +315,59 @@ fn phase_features_in_place_equal_fresh_evaluations() {
     );
 }
 
+/// Only the bases in ζ's window are tested: the features equal those from testing every
+/// basis, bit for bit, on a dense sweep of ζ, at each centre and at the edges where a basis
+/// turns on (h_i (ζ − c_i)² = 36: a few ulps and up to 1e-6 inside or out), for bases spread
+/// evenly (sorted windows, bisected), for two wide ones, and for bases whose windows reach
+/// below zero out of order (n_g 50, α_ζ 25: every basis tested).
+#[test]
+fn features_from_the_window_equal_testing_every_basis() {
+    use prf_shared::dmp::{Basis, Features};
+    let params = [
+        DmpParams::default(),
+        DmpParams {
+            n_basis: 2,
+            ..DmpParams::default()
+        },
+        DmpParams {
+            n_basis: 50,
+            alpha_zeta: 25.0,
+            ..DmpParams::default()
+        },
+        DmpParams {
+            n_basis: 6,
+            alpha_zeta: 0.3,
+            ..DmpParams::default()
+        },
+    ];
+    for p in params {
+        let basis = Basis::new(&p).unwrap();
+        let mut zetas: Vec<f64> = (0..=24_000).map(|k| k as f64 * 5e-5).collect();
+        for i in 0..basis.n {
+            let (c, r) = (basis.centres[i], (36.0 / basis.widths[i]).sqrt());
+            let near = [1.0 - 1e-6, 1.0 - 1e-8, 1.0, 1.0 + 1e-8];
+            for edge in near.iter().flat_map(|f| [c - r * f, c + r * f]).chain([c]) {
+                let bits = edge.to_bits() as i64;
+                zetas.extend((-8..=8).map(|d| f64::from_bits((bits + d) as u64)));
+            }
+        }
+        zetas.extend([0.0, -0.0, f64::MIN_POSITIVE, 1.0, f64::NAN, f64::INFINITY]);
+        let (mut fast, mut all) = (Features::ZERO, Features::ZERO);
+        for &zeta in &zetas {
+            basis.features_into(zeta, &mut fast);
+            basis.features_testing_all(zeta, &mut all);
+            let same = fast.first == all.first
+                && fast.last == all.last
+                && fast
+                    .values
+                    .iter()
+                    .zip(&all.values)
+                    .all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "n_g {} α_ζ {}: ζ = {zeta:e}", p.n_basis, p.alpha_zeta);
+        }
+    }
+}
+
 /// Heun's corrector evaluates f(ζ_{k+1}) and the next step reuses it as its f(ζ_k): runs
 /// that carry it equal, bit for bit, runs that evaluate every f afresh (`ahead` emptied before
 /// each step), for position and rotation, past τ into the fade, and after the phase seeks back

@@ -204,3 +204,35 @@ fn limits_are_the_iiwa14_datasheet() {
     assert_eq!(model.limit_violation(&[f64::NAN; NA]).map(|v| v.0), Some(0));
     assert!(model.limit_violation(&model.home).is_none());
 }
+
+/// Every iiwa joint turns about z, and FK multiplies by that rotation in 8 products: the frames
+/// and TCP carry the general quaternion product's bits. A joint whose axis is not z (here −z,
+/// turned the other way) takes the general product and gives the same pose to rounding.
+#[test]
+fn the_z_axis_product_gives_the_general_products_bits() {
+    let model = RobotModel::kmr_iiwa14();
+    let mut flipped = model.clone();
+    flipped.joints[3].axis = -Vector3::z_axis();
+    let bits = |p: &prf_shared::se3::Pose| {
+        let (t, r) = (p.translation.vector, p.rotation.quaternion());
+        [t.x, t.y, t.z, r.w, r.i, r.j, r.k].map(f64::to_bits)
+    };
+    let mut rng = StdRng::seed_from_u64(20);
+    for _ in 0..2000 {
+        let q = random_q(&mut rng, &model);
+        let (fast, general) = (
+            ArmKinematics::new(&model, &q),
+            ArmKinematics::new_general(&model, &q),
+        );
+        for (a, b) in fast.frames.iter().zip(&general.frames) {
+            assert_eq!(bits(a), bits(b), "q = {q:?}");
+        }
+        assert_eq!(bits(&fast.tcp), bits(&general.tcp), "q = {q:?}");
+        let mut q_flipped = q;
+        q_flipped[3] = -q[3];
+        let other = ArmKinematics::new(&flipped, &q_flipped).tcp;
+        let dp = (other.translation.vector - fast.tcp.translation.vector).norm();
+        let dr = log(&(other.rotation * fast.tcp.rotation.inverse())).norm();
+        assert!(dp < 1e-12 && dr < 1e-12, "q = {q:?}: {dp} m, {dr} rad");
+    }
+}

@@ -11,6 +11,11 @@ use super::{DmpError, DmpParams, MAX_BASES};
 /// resolution of the sum: skipped (no `exp` call).
 const NEGLIGIBLE_EXPONENT: f64 = 36.0;
 
+/// A basis whose computed exponent h_i (ζ − c_i)² is at least this is skipped by a margin far
+/// above the exponent's rounding (four roundings, ~1e-15 relative): [`Basis::candidates`]
+/// bisects on it.
+const CLEARLY_NEGLIGIBLE: f64 = NEGLIGIBLE_EXPONENT * (1.0 + 1e-6);
+
 /// Centres and widths of the n_g Gaussian bases.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Basis {
@@ -20,6 +25,10 @@ pub struct Basis {
     pub centres: [f64; MAX_BASES],
     /// Widths h_i.
     pub widths: [f64; MAX_BASES],
+    /// True if both ends of the windows c_i ± √([`CLEARLY_NEGLIGIBLE`]/h_i) fall with i, with
+    /// room to spare (as with centres spread evenly in time): the bases that can be active at
+    /// ζ are then a contiguous run, found by bisection ([`Basis::candidates`]).
+    sorted: bool,
 }
 
 /// Normalised, phase-gated activations φ_i(ζ) = ψ_i(ζ) ζ / Σ_j ψ_j(ζ); non-zero only in
@@ -65,7 +74,39 @@ impl Basis {
             widths[i] = 2.0 / (d * d);
         }
         widths[n - 1] = widths[n - 2];
-        Ok(Basis { n, centres, widths })
+        let sorted = windows_fall(&centres[..n]);
+        Ok(Basis {
+            n,
+            centres,
+            widths,
+            sorted,
+        })
+    }
+
+    /// The exponent h_i (ζ − c_i)² of basis i and the sign of ζ − c_i, computed as
+    /// [`Basis::features_into`] computes it.
+    #[inline(always)]
+    fn exponent(&self, i: usize, zeta: f64) -> (f64, f64) {
+        let d = zeta - self.centres[i];
+        (d, self.widths[i] * d * d)
+    }
+
+    /// Indices of the bases that can be active at ζ, in order: with sorted windows, the run
+    /// between the bases clearly above ζ (a prefix) and those clearly below it (a suffix),
+    /// each end found by bisection on the computed exponent; else all n. Every basis left out
+    /// has an exponent ≥ 36 (by sortedness, with a margin beyond rounding), so summing over
+    /// the run gives the same bits as summing over all n. Stores nothing per basis.
+    fn candidates(&self, zeta: f64) -> core::ops::Range<usize> {
+        if !self.sorted {
+            return 0..self.n;
+        }
+        let clear = |i: usize, side: f64| {
+            let (d, x) = self.exponent(i, zeta);
+            d * side > 0.0 && x >= CLEARLY_NEGLIGIBLE
+        };
+        let start = first_where(0, self.n, |i| !clear(i, -1.0));
+        let end = first_where(start, self.n, |i| clear(i, 1.0));
+        start..end
     }
 
     /// φ(ζ) for all bases.
@@ -75,15 +116,27 @@ impl Basis {
         out
     }
 
-    /// [`Basis::features`] written over `out` in place (no 30-value temporary to copy).
+    /// [`Basis::features`] written over `out` in place (no features temporary to copy),
+    /// testing only the [`Basis::candidates`] at ζ.
     pub fn features_into(&self, zeta: f64, out: &mut Features) {
+        self.features_among(self.candidates(zeta), zeta, out);
+    }
+
+    /// [`Basis::features_into`] testing every basis: the previous implementation, kept as the
+    /// benchmark's baseline and the tests' reference (the same bits).
+    pub fn features_testing_all(&self, zeta: f64, out: &mut Features) {
+        self.features_among(0..self.n, zeta, out);
+    }
+
+    /// φ(ζ) from the bases in `among` (a superset of the active ones, in order).
+    #[inline(always)]
+    fn features_among(&self, among: core::ops::Range<usize>, zeta: f64, out: &mut Features) {
         out.values[out.first..out.last].fill(0.0);
         let values = &mut out.values;
         let (mut first, mut last) = (usize::MAX, 0);
         let mut sum = 0.0;
-        for i in 0..self.n {
-            let d = zeta - self.centres[i];
-            let x = self.widths[i] * d * d;
+        for i in among {
+            let (_, x) = self.exponent(i, zeta);
             if x < NEGLIGIBLE_EXPONENT {
                 let psi = libm::exp(-x);
                 values[i] = psi;
@@ -104,6 +157,39 @@ impl Basis {
         out.first = first;
         out.last = last;
     }
+}
+
+/// True if the windows c_i ± √([`CLEARLY_NEGLIGIBLE`]/h_i) fall strictly with i at both
+/// ends, by more than 1e-9 of their radii (far beyond the exponent's rounding). Since
+/// h_i = 2/(c_{i+1} − c_i)² (h_{n−1} = h_{n−2}), the radius is √(T/2)·|c_{i+1} − c_i| to a few
+/// ulps: one square root, not one per basis (libm's is software on the controller).
+fn windows_fall(centres: &[f64]) -> bool {
+    let k = libm::sqrt(CLEARLY_NEGLIGIBLE / 2.0);
+    let n = centres.len();
+    let radius = |i: usize| {
+        let i = i.min(n - 2);
+        k * libm::fabs(centres[i + 1] - centres[i])
+    };
+    (1..n).all(|i| {
+        let (r0, r1) = (radius(i - 1), radius(i));
+        let room = 1e-9 * (r0 + r1);
+        let (c0, c1) = (centres[i - 1], centres[i]);
+        c1 - r1 < c0 - r0 - room && c1 + r1 < c0 + r0 - room
+    })
+}
+
+/// The first index in `lo..hi` where `p` holds, for a `p` that holds on a suffix of it
+/// (bisection; `hi` if nowhere).
+fn first_where(mut lo: usize, mut hi: usize, p: impl Fn(usize) -> bool) -> usize {
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if p(mid) {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    lo
 }
 
 /// Share of τ over which the forcing term fades linearly to zero after τ. The demonstration
