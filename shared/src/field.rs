@@ -467,34 +467,59 @@ impl DistanceField for Field<'_> {
         self.distance_upto(p, f64::NEG_INFINITY, &mut Hint::default())
     }
 
+    /// The two anchored tests inline (most lookups along a trajectory end there); the rest
+    /// in [`Field::lookup_from`].
+    #[inline]
     fn distance_upto(&self, p: &Vector3<f64>, stop: f64, hint: &mut Hint) -> f64 {
         if self.anchored && hint.stop <= stop && (p - hint.anchor).norm_squared() < hint.inner2 {
             // Still in the anchor's cell and within its slack (the test below, before the cell).
             return hint.stop;
         }
         let inside = (0..3).all(|a| p[a] >= self.origin[a] && p[a] <= self.top[a]);
-        if inside {
-            let c = self.cell_at(p);
-            let cell = self.cell_index(c);
-            if self.anchored
-                && hint.cell == cell
-                && hint.stop <= stop
-                && (p - hint.anchor).norm_squared() < hint.slack2
-            {
-                return hint.stop;
-            }
-            let v = self.distance_in_cell_upto(c, p, stop, hint);
-            if self.anchored && v <= stop && hint.cell == cell && hint.term != 0 {
-                let exact = self.term(c, cell, hint.term, p, f64::NEG_INFINITY);
-                let slack = stop - exact;
-                (hint.anchor, hint.stop) = (*p, stop);
-                hint.slack2 = if slack > 0.0 { slack * slack } else { 0.0 };
-                let inner = slack.min(self.face_distance(c, p) - FACE_MARGIN);
-                hint.inner2 = if inner > 0.0 { inner * inner } else { 0.0 };
-            }
-            return v;
+        if !inside {
+            return self.lookup_outside(p, stop, hint);
         }
-        // Outside the grid box (or NaN): the nearest box point's value plus the distance to it.
+        let c = self.cell_at(p);
+        let cell = self.cell_index(c);
+        if self.anchored
+            && hint.cell == cell
+            && hint.stop <= stop
+            && (p - hint.anchor).norm_squared() < hint.slack2
+        {
+            return hint.stop;
+        }
+        self.lookup_in(c, cell, p, stop, hint)
+    }
+}
+
+impl Field<'_> {
+    /// [`DistanceField::distance_upto`] at `p` inside the grid, in cell `c` (index `cell`),
+    /// past the anchored tests: the cell's terms, then the anchor renewed.
+    #[inline(never)]
+    fn lookup_in(
+        &self,
+        c: [usize; 3],
+        cell: u32,
+        p: &Vector3<f64>,
+        stop: f64,
+        hint: &mut Hint,
+    ) -> f64 {
+        let v = self.distance_in_cell_upto(c, p, stop, hint);
+        if self.anchored && v <= stop && hint.cell == cell && hint.term != 0 {
+            let exact = self.term(c, cell, hint.term, p, f64::NEG_INFINITY);
+            let slack = stop - exact;
+            (hint.anchor, hint.stop) = (*p, stop);
+            hint.slack2 = if slack > 0.0 { slack * slack } else { 0.0 };
+            let inner = slack.min(self.face_distance(c, p) - FACE_MARGIN);
+            hint.inner2 = if inner > 0.0 { inner * inner } else { 0.0 };
+        }
+        v
+    }
+
+    /// [`DistanceField::distance_upto`] outside the grid box (or NaN): the nearest box
+    /// point's value plus the distance to it.
+    #[inline(never)]
+    fn lookup_outside(&self, p: &Vector3<f64>, stop: f64, hint: &mut Hint) -> f64 {
         let q = p.sup(&self.origin).inf(&self.top);
         let outside = (p - q).norm();
         if !outside.is_finite() {
