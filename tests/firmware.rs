@@ -73,6 +73,27 @@ fn every_task_meets_the_budgets_and_matches_the_host_stream() {
             "{}: the output stage shaped a certified program",
             r.label
         );
+        // Each mode's ticks split into the executor's own work and the plant's (the output
+        // stage and the hand-off), which every arm tick runs.
+        for (mode, m) in ["base", "arm", "gripper"].iter().zip(&f.by_mode) {
+            assert!(
+                m.core_max <= m.max && m.core_mean <= m.mean,
+                "{}: {mode} ticks without the output stage {}/{} exceed the whole {}/{}",
+                r.label,
+                m.core_mean,
+                m.core_max,
+                m.mean,
+                m.max
+            );
+        }
+        let arm = &f.by_mode[1];
+        assert!(
+            arm.core_mean > 0 && arm.core_mean < arm.mean,
+            "{}: arm ticks {} instructions, {} without the output stage",
+            r.label,
+            arm.mean,
+            arm.core_mean
+        );
         assert!(
             f.tick_max <= MAX_TICK_INSTRUCTIONS,
             "{}: an executor tick took {} instructions (seq {})",

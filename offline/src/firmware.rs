@@ -18,6 +18,10 @@ use std::process::Command;
 pub const MAX_TICK_INSTRUCTIONS: u64 = 100_000;
 /// The goal per tick.
 pub const GOAL_TICK_INSTRUCTIONS: u64 = 15_000;
+/// Issue 20's goal for an arm tick without the output stage: mean and max.
+pub const GOAL_CORE_MEAN: u64 = 8_000;
+/// Issue 20's goal for the largest arm tick without the output stage.
+pub const GOAL_CORE_MAX: u64 = 10_000;
 /// Stated bound of planning one task: 0.625 s at 480 MHz (one instruction per cycle).
 pub const MAX_PLANNING_INSTRUCTIONS: u64 = 300_000_000;
 /// Static RAM budget: data + bss + the stack's high-water mark.

@@ -4,9 +4,9 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Longest encoded [`Figures`] record, bytes (postcard varints: 25 u64 of at most 10 bytes,
+/// Longest encoded [`Figures`] record, bytes (postcard varints: 31 u64 of at most 10 bytes,
 /// a u32 of at most 5, a flag).
-pub const MAX_LEN: usize = 256;
+pub const MAX_LEN: usize = 320;
 
 /// Ticks, max and mean instructions of the executor steps in one mode.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -17,6 +17,11 @@ pub struct ModeFigures {
     pub max: u64,
     /// Mean instructions of a step.
     pub mean: u64,
+    /// Largest instructions of one step without the output stage and the hand-off to the
+    /// cell (the plant's `command` and `emitted`): the executor's own work.
+    pub core_max: u64,
+    /// Mean instructions of a step without the output stage and the hand-off.
+    pub core_mean: u64,
 }
 
 /// What one firmware run measured.
@@ -86,6 +91,8 @@ mod tests {
             ticks: u64::MAX,
             max: u64::MAX,
             mean: u64::MAX,
+            core_max: u64::MAX,
+            core_mean: u64::MAX,
         };
         let f = Figures {
             blob_bytes: u64::MAX,

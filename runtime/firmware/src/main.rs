@@ -30,7 +30,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use embassy_time::{Duration, Instant};
 use fault::{Exit, exit};
-use measure::Stack;
+use measure::{Metered, Stack};
 use prf_ruckig::StagedCell;
 use prf_runtime::executor::{Executor, ExecutorConfig, Mode, Plant};
 use prf_runtime::figures::{self, Figures, ModeFigures};
@@ -246,14 +246,16 @@ fn execute(
         &mut reversal,
     );
     let ideal = IdealCell::new(rt.model.home, &task.home, rt.config.rdmp.dt);
-    let mut cell = StagedCell::new(ideal, &rt.limits);
+    let mut staged = StagedCell::new(ideal, &rt.limits);
+    let mut cell = Metered::new(&mut staged);
     let period = Duration::from_hz(TICK_HZ as u64);
     let mut t = Instant::from_ticks(0);
     let (mut late, mut busy, mut misses) = (0u64, 0, 0);
     // The slowest executor tick: instructions' counts, seq, mode.
     let mut worst = (0u64, 0u32, Mode::Base);
-    // Per mode (Base, Arm, Gripper, Done, Fault): ticks, max, sum.
-    let mut by_mode = [(0u64, 0u64, 0u64); 5];
+    // Per mode (Base, Arm, Gripper, Done, Fault): ticks, max, sum; without the plant's
+    // counts (the output stage and the hand-off): max, sum.
+    let mut by_mode = [(0u64, 0u64, 0u64, 0u64, 0u64); 5];
     let mut crc = CRC32.digest();
     let (mut ticker, mut due) = time_driver::aligned_ticker(period);
     let sp = loop {
@@ -268,6 +270,7 @@ fn execute(
             }
         };
         let used = counts() - woke;
+        let core = used.saturating_sub(cell.take());
         let record = stream::encode(&sp);
         crc.update(&record);
         let work = counts().saturating_sub(due);
@@ -277,7 +280,13 @@ fn execute(
             worst = (used, sp.seq, sp.mode);
         }
         let m = &mut by_mode[sp.mode as usize];
-        *m = (m.0 + 1, m.1.max(used), m.2 + used);
+        *m = (
+            m.0 + 1,
+            m.1.max(used),
+            m.2 + used,
+            m.3.max(core),
+            m.4 + core,
+        );
         let end = sp.is_final();
         if let Some(f) = file.as_mut() {
             buffer[buffered * RECORD_LEN..][..RECORD_LEN].copy_from_slice(&record);
@@ -316,12 +325,14 @@ fn execute(
     figures.tick_mean = sum * k / ticks.max(1);
     (figures.loop_max, figures.lateness_max) = (busy * k, late * k);
     figures.overruns = misses;
-    figures.shaped = cell.stage.shaped().0;
-    for (f, (n, max, sum)) in figures.by_mode.iter_mut().zip(by_mode) {
+    figures.shaped = cell.plant.stage.shaped().0;
+    for (f, (n, max, sum, core_max, core_sum)) in figures.by_mode.iter_mut().zip(by_mode) {
         *f = ModeFigures {
             ticks: n,
             max: max * k,
             mean: sum * k / n.max(1),
+            core_max: core_max * k,
+            core_mean: core_sum * k / n.max(1),
         };
     }
     figures.crc32 = crc.finalize();
@@ -336,13 +347,16 @@ fn execute(
         late * k,
         misses
     );
-    for (name, (n, max, sum)) in ["base", "arm", "gripper"].iter().zip(by_mode) {
+    for (name, (n, max, sum, core_max, core_sum)) in ["base", "arm", "gripper"].iter().zip(by_mode)
+    {
         hprintln!(
-            "  {} ticks {} max {} mean {} instructions",
+            "  {} ticks {} max {} mean {} instructions; without the output stage max {} mean {}",
             name,
             n,
             max * k,
-            sum * k / n.max(1)
+            sum * k / n.max(1),
+            core_max * k,
+            core_sum * k / n.max(1)
         );
     }
     hprintln!(
