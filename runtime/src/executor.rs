@@ -473,7 +473,7 @@ impl<'r, 'a> Executor<'r, 'a> {
         sp.base_goal = planar(goal);
         let g = sp.base_goal;
         let (dx, dy) = (m.base[0] - g[0], m.base[1] - g[1]);
-        let there = libm::sqrt(dx * dx + dy * dy) <= self.cfg.base_position_tolerance
+        let there = prf_shared::float::sqrt(dx * dx + dy * dy) <= self.cfg.base_position_tolerance
             && libm::fabs(wrap(m.base[2] - g[2])) <= self.cfg.base_yaw_tolerance;
         self.prepare_ahead()?;
         self.finish_or_wait(there, waited, self.cfg.base_timeout, sp.segment)

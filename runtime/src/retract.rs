@@ -66,7 +66,7 @@ impl Connect {
             );
             t = t
                 .max(1.875 * d / v)
-                .max(libm::sqrt(5.7735 * d / a))
+                .max(prf_shared::float::sqrt(5.7735 * d / a))
                 .max(libm::cbrt(60.0 * d / jk));
         }
         // NaN (a degenerate limit) counts as one tick: the executor's checks stop bad input.

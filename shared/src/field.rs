@@ -164,7 +164,7 @@ fn ball_bound(x: &Vector3<f64>, b: &Vector3<f64>, r: f64, stop: f64) -> f64 {
     if reach >= 0.0 && d2 <= reach * reach {
         stop
     } else {
-        libm::sqrt(d2) - r
+        crate::float::sqrt(d2) - r
     }
 }
 
@@ -286,7 +286,7 @@ impl<'a> Field<'a> {
     fn node_bound(&self, i: usize, j: usize, k: usize, x: &Vector3<f64>, stop: f64) -> f64 {
         match self.node(i, j, k) {
             Node::Ball(b, r) => ball_bound(x, &b, r, stop),
-            Node::Scalar(s) => s + (x - self.node_position(i, j, k)).norm(),
+            Node::Scalar(s) => s + crate::float::norm(&(x - self.node_position(i, j, k))),
         }
     }
 
@@ -521,7 +521,7 @@ impl Field<'_> {
     #[inline(never)]
     fn lookup_outside(&self, p: &Vector3<f64>, stop: f64, hint: &mut Hint) -> f64 {
         let q = p.sup(&self.origin).inf(&self.top);
-        let outside = (p - q).norm();
+        let outside = crate::float::norm(&(p - q));
         if !outside.is_finite() {
             return f64::NAN;
         }

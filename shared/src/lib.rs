@@ -15,16 +15,23 @@
 //! - [`limits`]: position, speed, acceleration and jerk limits of the KMR iiwa, and the meter
 //!   that rates a joint stream against them;
 //! - [`timing`]: an RDMP motion timed within the limits (time scaling of τ, settling to rest);
-//! - [`profile`], [`linalg`]: small helpers (time scaling, fixed-size solvers).
+//! - [`profile`], [`linalg`], [`float`]: small helpers (time scaling, fixed-size solvers, the
+//!   square root at each platform's speed with the same bits).
 //!
 //! Section, equation and algorithm numbers refer to Toner, Tilbury, Barton, "PRF: A Program
 //! Reuse Framework for Automated Programming by Learning from Existing Robot Programs",
 //! Robotics 2024, 13(8):118.
 #![no_std]
+// The Cortex-M7's hardware square root ([`float::sqrt`]); the firmware's toolchain allows it.
+#![cfg_attr(
+    all(target_arch = "arm", target_feature = "vfp2"),
+    feature(core_float_math)
+)]
 
 pub mod blob;
 pub mod dmp;
 pub mod field;
+pub mod float;
 pub mod kinematics;
 pub mod limits;
 pub mod linalg;

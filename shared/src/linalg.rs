@@ -18,7 +18,7 @@ pub fn cholesky_factor<const M: usize>(
         if !(d > 0.0) {
             return Err(NotPositiveDefinite);
         }
-        let d = libm::sqrt(d);
+        let d = crate::float::sqrt(d);
         a[j][j] = d;
         for i in (j + 1)..n {
             let mut s = a[i][j];

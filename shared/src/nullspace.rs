@@ -85,7 +85,7 @@ impl JacobianQr {
         let mut r = [[0.0; 6]; 6];
         let mut det_q = 1.0;
         for k in 0..6 {
-            let norm = libm::sqrt(a[k][k..].iter().map(|x| x * x).sum::<f64>());
+            let norm = crate::float::sqrt(a[k][k..].iter().map(|x| x * x).sum::<f64>());
             let alpha = if a[k][k] >= 0.0 { -norm } else { norm };
             let vk = &mut v[k];
             vk[k..].copy_from_slice(&a[k][k..]);
@@ -198,7 +198,7 @@ fn dot_from<const K: usize>(a: &[f64; 7], b: &[f64; 7]) -> f64 {
 /// bounds known at compile time.
 #[inline(always)]
 fn reflect<const K: usize>(a: &mut [[f64; 7]; 6], qr: &mut JacobianQr) {
-    let norm = libm::sqrt(dot_from::<K>(&a[K], &a[K]));
+    let norm = crate::float::sqrt(dot_from::<K>(&a[K], &a[K]));
     let alpha = if a[K][K] >= 0.0 { -norm } else { norm };
     let mut vk = [0.0; 7];
     vk[K..].copy_from_slice(&a[K][K..]);

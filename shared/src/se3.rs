@@ -4,6 +4,7 @@
 //! [`log`] returns the principal rotation vector (angle in [0, π]) computed with `atan2`, so it is
 //! accurate near 0 and near π and independent of the quaternion sign (no double-cover flips).
 
+use crate::float::norm;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 /// A rigid transform; `T_a^b` maps coordinates in frame `a` to frame `b`.
@@ -66,7 +67,7 @@ pub fn log(r: &Rot) -> Vector3<f64> {
     } else {
         (-q.w, -q.imag())
     };
-    let s = v.norm();
+    let s = norm(&v);
     if s < 1e-12 {
         // θ = 2·atan2(s, w) ≈ 2s/w; the series keeps full precision near the identity.
         return v * (2.0 / w);
@@ -76,7 +77,7 @@ pub fn log(r: &Rot) -> Vector3<f64> {
 
 /// SO(3) exponential of a rotation vector.
 pub fn exp(v: &Vector3<f64>) -> Rot {
-    let theta = v.norm();
+    let theta = norm(v);
     let half = 0.5 * theta;
     let (s, c) = (libm::sin(half), libm::cos(half));
     // sin(θ/2)/θ → 1/2 as θ → 0 (series to 4th order below 1e-4).
@@ -95,11 +96,11 @@ pub fn exp(v: &Vector3<f64>) -> Rot {
 /// this is what lets a rotation DMP reproduce motions with more than 180° of travel.
 pub fn log_near(r: &Rot, reference: &Vector3<f64>) -> Vector3<f64> {
     let v = log(r);
-    let theta = v.norm();
+    let theta = norm(&v);
     let axis = if theta > 1e-9 {
         v / theta
     } else {
-        let rn = reference.norm();
+        let rn = norm(reference);
         if rn < 1e-9 {
             return v;
         }
@@ -114,7 +115,7 @@ pub fn log_near(r: &Rot, reference: &Vector3<f64>) -> Vector3<f64> {
 /// libm's atan2: the same bits on every platform).
 pub fn angle_between(a: &Rot, b: &Rot) -> f64 {
     let q = (a.inverse() * b).into_inner();
-    2.0 * libm::atan2(q.imag().norm(), libm::fabs(q.w))
+    2.0 * libm::atan2(norm(&q.imag()), libm::fabs(q.w))
 }
 
 /// Pose error `(p_d − p, log(R_d R⁻¹))` of `actual` with respect to `desired`, both in the same

@@ -137,7 +137,7 @@ pub fn run_at(
 /// acceleration with 1/s², jerk with 1/s³.
 fn slow_down(r: &LimitRatios) -> f64 {
     r.speed
-        .max(libm::sqrt(r.acceleration))
+        .max(crate::float::sqrt(r.acceleration))
         .max(libm::cbrt(r.jerk))
 }
 

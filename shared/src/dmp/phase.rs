@@ -164,7 +164,7 @@ impl Basis {
 /// h_i = 2/(c_{i+1} − c_i)² (h_{n−1} = h_{n−2}), the radius is √(T/2)·|c_{i+1} − c_i| to a few
 /// ulps: one square root, not one per basis (libm's is software on the controller).
 fn windows_fall(centres: &[f64]) -> bool {
-    let k = libm::sqrt(CLEARLY_NEGLIGIBLE / 2.0);
+    let k = crate::float::sqrt(CLEARLY_NEGLIGIBLE / 2.0);
     let n = centres.len();
     let radius = |i: usize| {
         let i = i.min(n - 2);
