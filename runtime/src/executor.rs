@@ -448,7 +448,7 @@ impl<'r, 'a> Executor<'r, 'a> {
             return Err(Fault::ClockBackwards);
         }
         for (j, (q, s)) in m.arm.iter().zip(&self.last.arm).enumerate() {
-            let error = libm::fabs(q - s);
+            let error = f64::abs(q - s);
             if error > self.cfg.tracking_tolerance {
                 return Err(Fault::Tracking {
                     joint: j as u8,
@@ -474,7 +474,7 @@ impl<'r, 'a> Executor<'r, 'a> {
         let g = sp.base_goal;
         let (dx, dy) = (m.base[0] - g[0], m.base[1] - g[1]);
         let there = prf_shared::float::sqrt(dx * dx + dy * dy) <= self.cfg.base_position_tolerance
-            && libm::fabs(wrap(m.base[2] - g[2])) <= self.cfg.base_yaw_tolerance;
+            && f64::abs(wrap(m.base[2] - g[2])) <= self.cfg.base_yaw_tolerance;
         self.prepare_ahead()?;
         self.finish_or_wait(there, waited, self.cfg.base_timeout, sp.segment)
     }

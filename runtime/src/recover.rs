@@ -191,7 +191,7 @@ impl core::error::Error for RecoverError {}
 fn gap(a: &[f64; NA], b: &[f64; NA]) -> f64 {
     a.iter()
         .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max(libm::fabs(x - y)))
+        .fold(0.0f64, |m, (x, y)| m.max(f64::abs(x - y)))
 }
 
 /// The nearest configuration of a certified motion to a measured one.
@@ -312,7 +312,7 @@ pub fn locate(
     let at = |p: &Pose| {
         let g = planar(p);
         libm::hypot(m.base[0] - g[0], m.base[1] - g[1]) <= cfg.stance_position
-            && libm::fabs(wrap(m.base[2] - g[2])) <= cfg.stance_yaw
+            && f64::abs(wrap(m.base[2] - g[2])) <= cfg.stance_yaw
     };
     let home_gap = gap(&m.arm, &rt.model.home);
     if home_gap <= cfg.at_home {

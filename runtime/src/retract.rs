@@ -58,7 +58,7 @@ impl Connect {
         let fraction = speed_or_default(fraction);
         let mut t: f64 = 0.0;
         for j in 0..NA {
-            let d = libm::fabs(to[j] - from[j]);
+            let d = f64::abs(to[j] - from[j]);
             let (v, a, jk) = (
                 fraction * limits.arm_speed[j],
                 fraction * limits.arm_acceleration[j],

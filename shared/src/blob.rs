@@ -725,7 +725,7 @@ impl<'a> Blob<'a> {
 fn check_poses(poses: &[[f64; 7]], section: Section, index: usize) -> Result<(), BlobError> {
     let ok = poses.iter().all(|p| {
         let q = crate::float::sqrt(p[3] * p[3] + p[4] * p[4] + p[5] * p[5] + p[6] * p[6]);
-        p.iter().all(|v| v.is_finite()) && libm::fabs(q - 1.0) < 1e-6
+        p.iter().all(|v| v.is_finite()) && f64::abs(q - 1.0) < 1e-6
     });
     if ok {
         Ok(())

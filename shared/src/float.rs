@@ -1,11 +1,12 @@
-//! The square root both platforms compute alike, at the speed of each.
+//! The square root and rounding both platforms compute alike, at the speed of each.
 //!
 //! IEEE 754 requires the square root to be correctly rounded, so every conforming
 //! implementation gives the same bits for a non-NaN result. `libm::sqrt` uses the x86-64
 //! instruction, but on 32-bit ARM it is a software routine even where the FPU has one: the
 //! Cortex-M7's double-precision unit computes it in one `vsqrt.f64`, which is used there
 //! (rustc reports that unit as `target_feature = "vfp2"`: with `target-cpu=cortex-m7`, not
-//! for the single-precision Cortex-M4).
+//! for the single-precision Cortex-M4). Rounding to an integer is exact, so the FPU's
+//! `vrinta.f64` (FPv5) gives `libm::round`'s bits too.
 
 use nalgebra::Vector3;
 
@@ -22,6 +23,20 @@ pub fn sqrt(x: f64) -> f64 {
     #[cfg(not(all(target_arch = "arm", target_feature = "vfp2")))]
     {
         libm::sqrt(x)
+    }
+}
+
+/// x rounded to the nearest integer, halves away from zero (`libm::round`'s result, which is
+/// exact: the FPU's `vrinta.f64` on a Cortex-M7, the software routine elsewhere).
+#[inline(always)]
+pub fn round(x: f64) -> f64 {
+    #[cfg(all(target_arch = "arm", target_feature = "vfp2"))]
+    {
+        core::f64::math::round(x)
+    }
+    #[cfg(not(all(target_arch = "arm", target_feature = "vfp2")))]
+    {
+        libm::round(x)
     }
 }
 

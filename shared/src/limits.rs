@@ -136,11 +136,11 @@ impl ArmMeter {
             let jerk = (a - self.a[j]) * h;
             r.position = nan_max(
                 r.position,
-                libm::fabs(q[j] - self.middle[j]) * self.inv_range[j],
+                f64::abs(q[j] - self.middle[j]) * self.inv_range[j],
             );
-            r.speed = nan_max(r.speed, libm::fabs(v) * self.inv_speed[j]);
-            r.acceleration = nan_max(r.acceleration, libm::fabs(a) * self.inv_acceleration[j]);
-            r.jerk = nan_max(r.jerk, libm::fabs(jerk) * self.inv_jerk[j]);
+            r.speed = nan_max(r.speed, f64::abs(v) * self.inv_speed[j]);
+            r.acceleration = nan_max(r.acceleration, f64::abs(a) * self.inv_acceleration[j]);
+            r.jerk = nan_max(r.jerk, f64::abs(jerk) * self.inv_jerk[j]);
         }
         r
     }

@@ -137,7 +137,7 @@ impl JacobianQr {
     /// The kernel from q_7 = Q e_7: c = det Q · det R · q_7, normalised.
     fn oriented(&self, q7: [f64; 7]) -> Kernel {
         let det = self.det_q * self.det_r();
-        let w = libm::fabs(det);
+        let w = f64::abs(det);
         let direction = if w > 0.0 {
             JointVector::from(q7) * (if det > 0.0 { 1.0 } else { -1.0 })
         } else {
@@ -160,11 +160,11 @@ impl JacobianQr {
     /// [R⁻ᵀV; 0] by forward substitution; `None` if a diagonal entry of R is below
     /// [`RANK_TOLERANCE`] × the largest one.
     fn r_inv_t(&self, v: &Vector6<f64>) -> Option<[f64; 7]> {
-        let scale = (0..6).map(|k| libm::fabs(self.r[k][k])).fold(0.0, f64::max);
+        let scale = (0..6).map(|k| f64::abs(self.r[k][k])).fold(0.0, f64::max);
         let mut y = [0.0; 7];
         for i in 0..6 {
             let d = self.r[i][i];
-            if !(libm::fabs(d) > RANK_TOLERANCE * scale) {
+            if !(f64::abs(d) > RANK_TOLERANCE * scale) {
                 return None;
             }
             let s: f64 = (0..i).map(|k| self.r[k][i] * y[k]).sum();
@@ -241,7 +241,7 @@ impl JacobianQr {
     /// Manipulability √det(J Jᵀ) = |det R| (the one of [`JacobianQr::kernel`]), without
     /// applying Q.
     pub fn manipulability(&self) -> f64 {
-        libm::fabs(self.det_q * self.det_r())
+        f64::abs(self.det_q * self.det_r())
     }
 
     /// [`JacobianQr::kernel`] and [`JacobianQr::pinv_apply`] of `v` in one pass over the

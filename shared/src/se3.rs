@@ -107,7 +107,7 @@ pub fn log_near(r: &Rot, reference: &Vector3<f64>) -> Vector3<f64> {
         reference / rn
     };
     let along = reference.dot(&axis);
-    let k = libm::round((along - theta) / core::f64::consts::TAU);
+    let k = crate::float::round((along - theta) / core::f64::consts::TAU);
     v + axis * (k * core::f64::consts::TAU)
 }
 
@@ -115,7 +115,7 @@ pub fn log_near(r: &Rot, reference: &Vector3<f64>) -> Vector3<f64> {
 /// libm's atan2: the same bits on every platform).
 pub fn angle_between(a: &Rot, b: &Rot) -> f64 {
     let q = (a.inverse() * b).into_inner();
-    2.0 * libm::atan2(norm(&q.imag()), libm::fabs(q.w))
+    2.0 * libm::atan2(norm(&q.imag()), f64::abs(q.w))
 }
 
 /// Pose error `(p_d − p, log(R_d R⁻¹))` of `actual` with respect to `desired`, both in the same

@@ -62,8 +62,7 @@ impl<const N: usize> Forcing<N> {
         mut sample: impl FnMut(usize) -> (f64, SVector<f64, N>),
     ) -> Result<Self, DmpError> {
         let nb = basis.n;
-        let scaled: [bool; N] =
-            core::array::from_fn(|c| libm::fabs(amplitude[c]) >= p.min_amplitude);
+        let scaled: [bool; N] = core::array::from_fn(|c| f64::abs(amplitude[c]) >= p.min_amplitude);
         let mut gram = [[0.0; MAX_BASES]; MAX_BASES];
         let mut rhs = [[0.0; MAX_BASES]; N];
         for k in 0..n {

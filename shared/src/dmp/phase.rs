@@ -168,7 +168,7 @@ fn windows_fall(centres: &[f64]) -> bool {
     let n = centres.len();
     let radius = |i: usize| {
         let i = i.min(n - 2);
-        k * libm::fabs(centres[i + 1] - centres[i])
+        k * f64::abs(centres[i + 1] - centres[i])
     };
     (1..n).all(|i| {
         let (r0, r1) = (radius(i - 1), radius(i));

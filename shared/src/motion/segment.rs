@@ -43,14 +43,14 @@ fn arm_moves(p: &[Sample], i: usize) -> bool {
     p[i].arm
         .iter()
         .zip(&p[i + 1].arm)
-        .any(|(a, b)| libm::fabs(b - a) > STILL)
+        .any(|(a, b)| f64::abs(b - a) > STILL)
 }
 
 fn base_moves(p: &[Sample], i: usize) -> bool {
     p[i].base
         .iter()
         .zip(&p[i + 1].base)
-        .any(|(a, b)| libm::fabs(b - a) > STILL)
+        .any(|(a, b)| f64::abs(b - a) > STILL)
 }
 
 /// Indices k where the gripper crosses 0.5 between samples k−1 and k, closing (`close`) or
