@@ -218,6 +218,8 @@ pub struct Executor<'r, 'a> {
     /// meaningless while None.
     prepared: Option<usize>,
     rdmp: Rdmp,
+    /// The prepared segment's run: forward, then, once finished, the reversal's
+    /// re-integration of the same motion ([`Reversal::next`]), without a copy.
     run: Option<RdmpRun>,
     last: Setpoint,
     fault: Option<Fault>,
@@ -403,7 +405,7 @@ impl<'r, 'a> Executor<'r, 'a> {
             }
             Some(Segment::Reverse { .. }) if self.prepared.is_some() => {
                 self.reversal
-                    .prepare(&self.rdmp, &self.rt.config.rdmp)
+                    .prepare(&mut self.run, &self.rdmp, &self.rt.config.rdmp)
                     .map_err(|error| Fault::Reverse {
                         segment: i as u8,
                         error,
@@ -538,9 +540,7 @@ impl<'r, 'a> Executor<'r, 'a> {
         sp.arm = step.q.into();
         sp.arm_velocity = step.qd.into();
         if run.finished() {
-            if let Some(run) = self.run.take() {
-                self.reversal.adopt(run);
-            }
+            // The run stays: a reversal re-integrates in it.
             self.finish_segment();
         }
         Ok(())
@@ -557,7 +557,7 @@ impl<'r, 'a> Executor<'r, 'a> {
         let rdmp = &self.rdmp;
         let q = self
             .reversal
-            .next(model, rdmp, cfg)
+            .next(&mut self.run, model, rdmp, cfg)
             .map_err(|error| Fault::Reverse {
                 segment: index,
                 error,
@@ -580,7 +580,7 @@ impl<'r, 'a> Executor<'r, 'a> {
         // Until it moves, the arm holds the last setpoint (`sp` starts as it).
         sp.mode = Mode::Arm;
         sp.arm_velocity = [0.0; NA];
-        // Prepared once: the replay hands its run to the reversal.
+        // Prepared once: the replay's run then re-integrates for the reversal.
         if self.retract.is_none() && !self.prepare(self.segment)? {
             return Ok(());
         }
@@ -588,24 +588,23 @@ impl<'r, 'a> Executor<'r, 'a> {
         let phase = self.retract.get_or_insert(Retraction::Replay);
         let rdmp = &self.rdmp;
         let reversal = &mut *self.reversal;
+        let run = &mut self.run;
         let reverse_fault = |error| Fault::Reverse { segment, error };
         let q = match phase {
             Retraction::Replay => {
-                let Some(run) = self.run.as_mut() else {
+                let Some(forward) = run.as_mut() else {
                     return Err(Fault::Program { segment });
                 };
-                if run.progress().0 < from as usize {
-                    reversal.record(run);
-                    run.step(model, rdmp, cfg)
+                if forward.progress().0 < from as usize {
+                    reversal.record(forward);
+                    forward
+                        .step(model, rdmp, cfg)
                         .map_err(|error| Fault::Rdmp { segment, error })?;
                     return Ok(());
                 }
-                let target = (*run.q()).into();
-                if let Some(run) = self.run.take() {
-                    reversal.adopt(run);
-                }
+                let target = (*forward.q()).into();
                 // A tick without a step: the reversal's first resume.
-                reversal.prepare(rdmp, cfg).map_err(reverse_fault)?;
+                reversal.prepare(run, rdmp, cfg).map_err(reverse_fault)?;
                 let speed = self.cfg.retract_speed;
                 *phase = Retraction::Connect(
                     Connect::new(self.last.arm, target, &self.rt.limits, speed, cfg.dt),
@@ -615,7 +614,7 @@ impl<'r, 'a> Executor<'r, 'a> {
             }
             Retraction::Connect(c, p) => {
                 if p.wants() {
-                    p.feed(reversal_next(reversal, model, rdmp, cfg, segment)?);
+                    p.feed(reversal_next(reversal, run, model, rdmp, cfg, segment)?);
                 }
                 let q = c.setpoint();
                 if c.finished() {
@@ -627,7 +626,7 @@ impl<'r, 'a> Executor<'r, 'a> {
                 // At most one reversal step per tick; at the start the playback waits at rest
                 // until it holds three samples (if the move onto the path was shorter).
                 if p.wants() {
-                    p.feed(reversal_next(reversal, model, rdmp, cfg, segment)?);
+                    p.feed(reversal_next(reversal, run, model, rdmp, cfg, segment)?);
                 }
                 if p.wants() {
                     return Ok(());
@@ -649,13 +648,14 @@ impl<'r, 'a> Executor<'r, 'a> {
 /// The reversal's next configuration for a retraction of segment `segment`.
 fn reversal_next(
     reversal: &mut Reversal,
+    run: &mut Option<RdmpRun>,
     model: &prf_shared::robot::RobotModel,
     rdmp: &Rdmp,
     cfg: &prf_shared::rdmp::RdmpConfig,
     segment: u8,
 ) -> Result<[f64; NA], Fault> {
     reversal
-        .next(model, rdmp, cfg)
+        .next(run, model, rdmp, cfg)
         .map_err(|error| Fault::Reverse { segment, error })?
         .map(Into::into)
         .ok_or(Fault::Program { segment })

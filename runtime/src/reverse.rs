@@ -13,8 +13,9 @@
 //! Resuming from a checkpoint costs about as much as a step, so it is done in a tick without
 //! one: the tick that completes a block's re-integration starts the next block's, and
 //! [`Reversal::prepare`] starts the first one ahead (during the gripper segment before the
-//! reversal). Resumes keep the bases of the forward run ([`Reversal::adopt`],
-//! [`RdmpRun::resume_from`]).
+//! reversal). The re-integration runs in the caller's slot of the motion's run: once the
+//! forward run has finished, its resumes keep its bases ([`RdmpRun::resume_from`]) and the
+//! run is never copied.
 
 use prf_shared::rdmp::{Rdmp, RdmpCheckpoint, RdmpConfig, RdmpError, RdmpRun};
 use prf_shared::robot::RobotModel;
@@ -39,9 +40,10 @@ pub struct Reversal {
     refill: Option<Refill>,
 }
 
-/// The re-integration of block `block` into its buffer, at position `pos`.
+/// The re-integration of block `block` into its buffer, at position `pos` (by the run in
+/// the caller's slot).
+#[derive(Clone, Copy)]
 struct Refill {
-    run: RdmpRun,
     pos: usize,
     block: usize,
 }
@@ -100,10 +102,12 @@ impl Reversal {
         self.i >= self.n
     }
 
-    /// Starts re-integrating block `b` (≥ 1) from its checkpoint.
+    /// Starts re-integrating block `b` (≥ 1) from its checkpoint, in `run` (resumed when it
+    /// holds a run of `rdmp`, which keeps its bases; made otherwise).
     fn start_refill(
         &mut self,
         b: usize,
+        run: &mut Option<RdmpRun>,
         rdmp: &Rdmp,
         cfg: &RdmpConfig,
     ) -> Result<(), ReverseError> {
@@ -114,50 +118,37 @@ impl Reversal {
             .checked_sub(b)
             .and_then(|c| self.checkpoints.get(c))
             .ok_or(ReverseError::MissingCheckpoint)?;
-        match &mut self.refill {
-            // A run of this motion (`begin` clears the last motion's): keep its bases.
-            Some(r) => {
-                r.run.resume_from(c);
-                r.pos = 0;
-                r.block = b;
-            }
-            None => {
-                self.refill = Some(Refill {
-                    run: RdmpRun::resume(rdmp, cfg, c)?,
-                    pos: 0,
-                    block: b,
-                })
-            }
+        match run {
+            Some(r) => r.resume_from(c),
+            None => *run = Some(RdmpRun::resume(rdmp, cfg, c)?),
         }
+        self.refill = Some(Refill { pos: 0, block: b });
         Ok(())
     }
 
-    /// Takes the finished forward run, so re-integration reuses its bases instead of
-    /// computing them again.
-    pub fn adopt(&mut self, run: RdmpRun) {
-        if self.refill.is_none() {
-            self.refill = Some(Refill {
-                run,
-                pos: 0,
-                block: 0,
-            });
-        }
-    }
-
     /// Work ahead of the first backward tick, for a tick without an RDMP step: starts
-    /// re-integrating the second block. Does nothing when done already or not needed.
-    pub fn prepare(&mut self, rdmp: &Rdmp, cfg: &RdmpConfig) -> Result<(), ReverseError> {
+    /// re-integrating the second block in `run` (the slot of the motion's run, as for
+    /// [`Reversal::next`]). Does nothing when done already or not needed.
+    pub fn prepare(
+        &mut self,
+        run: &mut Option<RdmpRun>,
+        rdmp: &Rdmp,
+        cfg: &RdmpConfig,
+    ) -> Result<(), ReverseError> {
         let started = matches!(&self.refill, Some(r) if r.block == 1);
         if self.i == 0 && !started && self.blocks() > 1 {
-            self.start_refill(1, rdmp, cfg)?;
+            self.start_refill(1, run, rdmp, cfg)?;
         }
         Ok(())
     }
 
     /// The next configuration backwards (q_{n−1}, …, q_0), with at most one RDMP step of
-    /// re-integration or one resume.
+    /// re-integration or one resume. `run` is the slot of the motion's run: the finished
+    /// forward run of `rdmp` (its bases are kept) or None; the re-integration runs in it, so
+    /// the caller leaves it alone until the playback ends.
     pub fn next(
         &mut self,
+        run: &mut Option<RdmpRun>,
         model: &RobotModel,
         rdmp: &Rdmp,
         cfg: &RdmpConfig,
@@ -171,7 +162,7 @@ impl Reversal {
         let next_started = matches!(&self.refill, Some(r) if r.block == j + 1);
         if j + 1 < self.blocks() && !next_started {
             // Not started ahead.
-            self.start_refill(j + 1, rdmp, cfg)?;
+            self.start_refill(j + 1, run, rdmp, cfg)?;
         }
         let len = start - self.block_start(j + 1);
         let mut complete = false;
@@ -179,17 +170,18 @@ impl Reversal {
             && r.block == j + 1
             && r.pos < len
         {
-            self.buffers[(j + 1) % 2][r.pos] = (*r.run.q()).into();
+            let run = run.as_mut().ok_or(ReverseError::RunDropped)?;
+            self.buffers[(j + 1) % 2][r.pos] = (*run.q()).into();
             r.pos += 1;
             if r.pos < len {
-                r.run.step(model, rdmp, cfg)?;
+                run.step(model, rdmp, cfg)?;
             } else {
                 complete = true;
             }
         }
         if complete && j + 2 < self.blocks() {
             // This tick had no step: start the next block's re-integration.
-            self.start_refill(j + 2, rdmp, cfg)?;
+            self.start_refill(j + 2, run, rdmp, cfg)?;
         }
         self.i += 1;
         Ok(Some(JointVector::from(q)))
@@ -212,6 +204,8 @@ pub enum ReverseError {
     },
     /// The forward motion was not recorded from its start.
     MissingCheckpoint,
+    /// The run re-integrating the motion was dropped before the playback ended.
+    RunDropped,
     /// Re-integration failed (it cannot, for a motion that ran forward).
     Rdmp(RdmpError),
 }
@@ -226,6 +220,10 @@ impl core::fmt::Display for ReverseError {
             ReverseError::MissingCheckpoint => {
                 write!(f, "the forward motion was not recorded from its start")
             }
+            ReverseError::RunDropped => write!(
+                f,
+                "the run re-integrating the motion was dropped before the playback ended"
+            ),
             ReverseError::Rdmp(e) => write!(f, "re-integrating the forward motion failed: {e}"),
         }
     }
@@ -269,10 +267,18 @@ mod tests {
         let cfg = RdmpConfig::default();
         let mut rev = std::boxed::Box::new(Reversal::new());
         // Shorter than a block, one block, a block and a bit, several blocks; with the first
-        // resume prepared ahead or not.
-        for (n, prepared) in [40, BLOCK, BLOCK + 1, 3 * BLOCK + 77]
-            .into_iter()
-            .flat_map(|n| [(n, false), (n, true)])
+        // resume prepared ahead or not; re-integrating in the forward run or in a new one.
+        for (n, prepared, kept) in
+            [40, BLOCK, BLOCK + 1, 3 * BLOCK + 77]
+                .into_iter()
+                .flat_map(|n| {
+                    [
+                        (n, false, false),
+                        (n, true, false),
+                        (n, false, true),
+                        (n, true, true),
+                    ]
+                })
         {
             let r = rdmp(&model, n);
             let q0 = JointVector::from(model.home);
@@ -292,21 +298,42 @@ mod tests {
                 rev.record(&run);
                 forward.push(run.step(&model, &r, &cfg).expect("step").q);
             }
+            let mut slot = kept.then_some(run);
             if prepared {
-                rev.adopt(run);
-                rev.prepare(&r, &cfg).expect("prepare");
+                rev.prepare(&mut slot, &r, &cfg).expect("prepare");
             }
             let mut backward = Vec::new();
-            while let Some(q) = rev.next(&model, &r, &cfg).expect("reverse") {
+            while let Some(q) = rev.next(&mut slot, &model, &r, &cfg).expect("reverse") {
                 backward.push(q);
             }
             forward.pop();
             forward.reverse();
             assert_eq!(
                 backward, forward,
-                "n = {n}, prepared {prepared}: bit-identical reversal"
+                "n = {n}, prepared {prepared}, forward run kept {kept}: bit-identical reversal"
             );
         }
+        // A slot emptied while a block is being re-integrated is an error, not a panic.
+        let r = rdmp(&model, 2 * BLOCK);
+        let q0 = JointVector::from(model.home);
+        let goal = ArmKinematics::new(
+            &model,
+            &JointVector::from(core::array::from_fn(|i| model.home[i] + 0.1)),
+        )
+        .tcp;
+        let mut run = RdmpRun::new(&model, &r, &q0, &goal, &cfg).expect("run");
+        rev.begin(run.progress().1).expect("fits");
+        while !run.finished() {
+            rev.record(&run);
+            run.step(&model, &r, &cfg).expect("step");
+        }
+        let mut slot = Some(run);
+        rev.next(&mut slot, &model, &r, &cfg).expect("first");
+        slot = None;
+        assert_eq!(
+            rev.next(&mut slot, &model, &r, &cfg),
+            Err(ReverseError::RunDropped)
+        );
         assert_eq!(
             rev.begin(MAX_STEPS + 1),
             Err(ReverseError::TooLong {
