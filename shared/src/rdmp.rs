@@ -23,7 +23,7 @@ use crate::dmp::{
 use crate::kinematics::ArmKinematics;
 use crate::nullspace::{JacobianQr, kernel};
 use crate::robot::RobotModel;
-use crate::se3::{Pose, pose_error};
+use crate::se3::{Pose, Rot, pose_error};
 use crate::{JointVector, NA};
 use nalgebra::{Isometry3, Translation3, Vector1, Vector3, Vector6};
 
@@ -475,16 +475,36 @@ impl RdmpRun {
                 manipulability,
             });
         }
-        // Work on copies and commit only on success: a refused step leaves the run unchanged.
+        // The DMPs step in place; a refused step puts back what they moved (`Moved`), so it
+        // leaves the run unchanged without copying the states in and out on every step.
+        let moved = Moved::of(self);
+        let result = self.advance(model, rdmp, cfg, &kin, &qr, manipulability);
+        if result.is_err() {
+            moved.put_back(self);
+        }
+        result
+    }
+
+    /// Step's work after the QR: the DMPs' Heun steps, the joint velocity (Alg. 2 line 7),
+    /// and the checks; commits q, γ's measurement and the phase only on success.
+    #[inline(always)]
+    fn advance(
+        &mut self,
+        model: &RobotModel,
+        rdmp: &Rdmp,
+        cfg: &RdmpConfig,
+        kin: &ArmKinematics,
+        qr: &JacobianQr,
+        manipulability: f64,
+    ) -> Result<RdmpStep, RdmpError> {
+        let k = self.phase.step;
         let (e_p, e_r) = pose_error(&self.dmp_pose(), &kin.tcp);
-        let (mut position, mut rotation, mut gamma) = (self.position, self.rotation, self.gamma);
-        let mut ahead = self.ahead;
-        let gamma_dmp = gamma.y[0];
+        let gamma_dmp = self.gamma.y[0];
         let (pp, rp, gp) = (&rdmp.position, &rdmp.rotation, &rdmp.gamma);
-        let phase = &self.phase;
-        let v = position.step(&pp.params, &pp.forcing, pp.tau, cfg.dt, phase, &mut ahead.0);
-        let w = rotation.step(&rp.params, &rp.forcing, rp.tau, cfg.dt, phase, &mut ahead.1);
-        let g = gamma.step(&gp.params, &gp.forcing, gp.tau, cfg.dt, phase, &mut ahead.2);
+        let (phase, ahead) = (&self.phase, &mut self.ahead);
+        let v = (self.position).step(&pp.params, &pp.forcing, pp.tau, cfg.dt, phase, &mut ahead.0);
+        let w = (self.rotation).step(&rp.params, &rp.forcing, rp.tau, cfg.dt, phase, &mut ahead.1);
+        let g = (self.gamma).step(&gp.params, &gp.forcing, gp.tau, cfg.dt, phase, &mut ahead.2);
         let twist = join(&(v + e_p * cfg.gain), &(w + e_r * cfg.gain));
         let (ker, pinv) = qr.kernel_and_pinv(&twist);
         let mut gamma_measured = self.gamma_measured;
@@ -507,10 +527,6 @@ impl RdmpRun {
                 value,
             });
         }
-        self.position = position;
-        self.rotation = rotation;
-        self.gamma = gamma;
-        self.ahead = ahead;
         self.phase.advance();
         self.gamma_measured = gamma_measured;
         self.previous = Some((ker.direction, self.q));
@@ -523,6 +539,43 @@ impl RdmpRun {
             gamma_measured,
             manipulability: ker.manipulability,
         })
+    }
+}
+
+/// What a step's DMPs move (positions, velocities, orientation and the unwrapping reference):
+/// kept before the step and put back when it is refused. The carried forcing values need not
+/// be: they name the step they belong to, and a retry at step k evaluates f(ζ_k) again.
+#[derive(Clone, Copy)]
+struct Moved {
+    y: Vector3<f64>,
+    z: Vector3<f64>,
+    r: Rot,
+    eta: Vector3<f64>,
+    error: Vector3<f64>,
+    gamma: Vector1<f64>,
+    gamma_z: Vector1<f64>,
+}
+
+impl Moved {
+    #[inline(always)]
+    fn of(run: &RdmpRun) -> Self {
+        let (p, r, g) = (&run.position, &run.rotation, &run.gamma);
+        Moved {
+            y: p.y,
+            z: p.z,
+            r: r.r,
+            eta: r.eta,
+            error: r.error,
+            gamma: g.y,
+            gamma_z: g.z,
+        }
+    }
+
+    #[cold]
+    fn put_back(&self, run: &mut RdmpRun) {
+        (run.position.y, run.position.z) = (self.y, self.z);
+        (run.rotation.r, run.rotation.eta, run.rotation.error) = (self.r, self.eta, self.error);
+        (run.gamma.y, run.gamma.z) = (self.gamma, self.gamma_z);
     }
 }
 

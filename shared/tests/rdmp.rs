@@ -194,6 +194,21 @@ fn refused_step_leaves_the_run_unchanged() {
         (*run.q(), run.dmp_pose(), run.progress()),
         (q_before, pose_before, progress)
     );
+    // No trace at all (velocities, orientation, γ, the carried forcing values): with the limit
+    // lifted, the refused run continues bit for bit as a run that was never refused.
+    let mut free = f.model.clone();
+    free.joints[0].upper = f64::INFINITY;
+    let mut reference = RdmpRun::new(&free, &f.rdmp, &q0, &goal, &f.cfg).unwrap();
+    while reference.progress() != progress {
+        reference.step(&free, &f.rdmp, &f.cfg).unwrap();
+    }
+    while !reference.finished() {
+        assert_eq!(
+            run.step(&free, &f.rdmp, &f.cfg).unwrap(),
+            reference.step(&free, &f.rdmp, &f.cfg).unwrap()
+        );
+    }
+    assert!(run.finished());
 }
 
 #[test]
