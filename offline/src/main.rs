@@ -82,7 +82,11 @@ enum Command {
 }
 
 fn main() -> anyhow::Result<()> {
-    match Cli::parse().command {
+    let cli = Cli::parse();
+    if cli.command.as_ref().is_some_and(Command::only_prints) {
+        die_quietly_on_a_closed_pipe();
+    }
+    match cli.command {
         None => demo::run(&demo::Args::default()),
         Some(Command::Demo(args)) => demo::run(&args),
         Some(Command::RdmpDemo(args)) => rdmp_demo::run(&args),
@@ -102,5 +106,39 @@ fn main() -> anyhow::Result<()> {
         Some(Command::Firmware(args)) => firmware::run(&args),
         Some(Command::IpcPeer(args)) => bench::cell::peer(&args),
         Some(Command::FirmwareSim(args)) => Ok(prf_firmware_sim::cli::run(&args)?),
+    }
+}
+
+impl Command {
+    /// Commands that compute and print, without processes, sockets or pipes of their own to
+    /// write to: a closed stdout may end them by SIGPIPE. The cell's commands keep Rust's
+    /// default (SIGPIPE ignored), so that a dead peer is an error they report.
+    fn only_prints(&self) -> bool {
+        matches!(
+            self,
+            Command::RdmpDemo(_)
+                | Command::Bench(_)
+                | Command::Gen(_)
+                | Command::CheckDataset(_)
+                | Command::ImportBag(_)
+                | Command::ExportMcap(_)
+                | Command::Learn(_)
+                | Command::Inspect(_)
+                | Command::Plan(_)
+                | Command::Envelope(_)
+                | Command::Experiment(_)
+        )
+    }
+}
+
+/// `prf … | head` ends the way Unix tools do when the reader closes the pipe: SIGPIPE ends
+/// the process quietly. (Rust ignores SIGPIPE by default, and `println!` then panics on the
+/// EPIPE error.)
+#[allow(unsafe_code)] // One libc call: the signal's disposition.
+fn die_quietly_on_a_closed_pipe() {
+    // SAFETY: restores the default disposition of one signal before any thread starts; no
+    // handler runs Rust code.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }

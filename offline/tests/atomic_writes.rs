@@ -1,6 +1,7 @@
 //! Nothing lost on disk (issue 18): a `prf` run cut short while it writes — here by a file-size
 //! limit, whose SIGXFSZ kills the process mid-write as a full disk or a kill would stop it —
-//! leaves the previous dataset, blob and bag exactly as they were.
+//! leaves the previous dataset, blob and bag exactly as they were. A run cut short by its
+//! reader (a closed stdout) ends quietly.
 
 mod common;
 
@@ -88,4 +89,28 @@ fn a_write_cut_short_leaves_the_previous_dataset_blob_and_bag_intact() {
             "{name}"
         );
     }
+}
+
+/// A reader that closes the pipe early (`prf plan … | head`) ends `prf` the way it ends Unix
+/// tools, by SIGPIPE, not with a panic over the failed print.
+#[test]
+fn a_closed_stdout_ends_prf_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_prf"))
+        .args(["bench", "--seconds", "0.01"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start prf");
+    // Close the read end before prf prints (or while it does).
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait for prf");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "prf panicked: {stderr}");
+    assert_eq!(
+        out.status.signal(),
+        Some(13),
+        "prf should end by SIGPIPE: {:?}, {stderr}",
+        out.status
+    );
 }
