@@ -63,7 +63,9 @@ pub trait DistanceField {
 /// It also anchors that lookup: the term's exact value v at the point x_a and the `stop` s_a
 /// it was settled against. Each term is 1-Lipschitz, so while the point stays in the cell and
 /// within s_a − v of x_a the field there is still ≤ s_a, and a lookup with a stop ≥ s_a is
-/// settled without reading the field. A hint belongs to one field.
+/// settled without reading the field. "In the cell" is first tested on the cell's box, kept
+/// [`FACE_MARGIN`] inside its faces, before the cell is even computed. A hint belongs to one
+/// field.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Hint {
     cell: u32,
@@ -72,10 +74,9 @@ pub struct Hint {
     anchor: Vector3<f64>,
     /// (s_a − v)², or 0 (no anchor).
     slack2: f64,
-    /// The square of the slack, or less: of the anchor's distance to its cell's faces
-    /// (less [`FACE_MARGIN`]) when that is smaller. Within it the point is still in the cell,
-    /// so a lookup is settled before the cell is even computed.
-    inner2: f64,
+    /// The anchor cell's lowest node plus [`FACE_MARGIN`] on each axis: a point x with
+    /// 0 < x − corner < h − 2 · [`FACE_MARGIN`] on every axis is in that cell.
+    corner: Vector3<f64>,
     /// s_a.
     stop: f64,
 }
@@ -146,6 +147,8 @@ pub struct Field<'a> {
     inv_h: f64,
     /// Location-frame position of the last node.
     top: Vector3<f64>,
+    /// h − 2 · [`FACE_MARGIN`]: a cell's box as [`Hint`] tests it.
+    span: f64,
     dims: [usize; 3],
     bricks_per_axis: [usize; 3],
     bricks: &'a [u8],
@@ -219,6 +222,7 @@ impl<'a> Field<'a> {
             h,
             inv_h: 1.0 / h,
             top,
+            span: h - 2.0 * FACE_MARGIN,
             dims,
             bricks_per_axis,
             bricks: d.bricks,
@@ -444,12 +448,6 @@ impl<'a> Field<'a> {
         best - delta
     }
 
-    /// Distance from `x`, a point of cell `c`, to the nearest face of the cell.
-    fn face_distance(&self, c: [usize; 3], x: &Vector3<f64>) -> f64 {
-        let local = x - self.node_position(c[0], c[1], c[2]);
-        (0..3).fold(f64::INFINITY, |m, a| m.min(local[a]).min(self.h - local[a]))
-    }
-
     /// Linear index of cell (i, j, k).
     pub fn cell_index(&self, c: [usize; 3]) -> u32 {
         ((c[0] * (self.dims[1] - 1) + c[1]) * (self.dims[2] - 1) + c[2]) as u32
@@ -471,9 +469,13 @@ impl DistanceField for Field<'_> {
     /// in [`Field::lookup_from`].
     #[inline]
     fn distance_upto(&self, p: &Vector3<f64>, stop: f64, hint: &mut Hint) -> f64 {
-        if self.anchored && hint.stop <= stop && (p - hint.anchor).norm_squared() < hint.inner2 {
-            // Still in the anchor's cell and within its slack (the test below, before the cell).
-            return hint.stop;
+        if self.anchored && hint.stop <= stop && (p - hint.anchor).norm_squared() < hint.slack2 {
+            // Within the anchor's slack, and in its cell's box (the test below, before the
+            // cell).
+            let x = p - hint.corner;
+            if (0..3).all(|a| x[a] > 0.0 && x[a] < self.span) {
+                return hint.stop;
+            }
         }
         let inside = (0..3).all(|a| p[a] >= self.origin[a] && p[a] <= self.top[a]);
         if !inside {
@@ -510,8 +512,7 @@ impl Field<'_> {
             let slack = stop - exact;
             (hint.anchor, hint.stop) = (*p, stop);
             hint.slack2 = if slack > 0.0 { slack * slack } else { 0.0 };
-            let inner = slack.min(self.face_distance(c, p) - FACE_MARGIN);
-            hint.inner2 = if inner > 0.0 { inner * inner } else { 0.0 };
+            hint.corner = self.node_position(c[0], c[1], c[2]).add_scalar(FACE_MARGIN);
         }
         v
     }
@@ -525,7 +526,7 @@ impl Field<'_> {
         if !outside.is_finite() {
             return f64::NAN;
         }
-        (hint.slack2, hint.inner2) = (0.0, 0.0);
+        hint.slack2 = 0.0;
         self.distance_in_cell_upto(self.cell_at(&q), &q, stop - outside, hint) + outside
     }
 }
