@@ -502,9 +502,15 @@ impl RdmpRun {
         let gamma_dmp = self.gamma.y[0];
         let (pp, rp, gp) = (&rdmp.position, &rdmp.rotation, &rdmp.gamma);
         let (phase, ahead) = (&self.phase, &mut self.ahead);
-        let v = (self.position).step(&pp.params, &pp.forcing, pp.tau, cfg.dt, phase, &mut ahead.0);
-        let w = (self.rotation).step(&rp.params, &rp.forcing, rp.tau, cfg.dt, phase, &mut ahead.1);
-        let g = (self.gamma).step(&gp.params, &gp.forcing, gp.tau, cfg.dt, phase, &mut ahead.2);
+        let v = self
+            .position
+            .step(&pp.params, &pp.forcing, pp.tau, cfg.dt, phase, &mut ahead.0);
+        let w = self
+            .rotation
+            .step(&rp.params, &rp.forcing, rp.tau, cfg.dt, phase, &mut ahead.1);
+        let g = self
+            .gamma
+            .step(&gp.params, &gp.forcing, gp.tau, cfg.dt, phase, &mut ahead.2);
         let twist = join(&(v + e_p * cfg.gain), &(w + e_r * cfg.gain));
         let (ker, pinv) = qr.kernel_and_pinv(&twist);
         let mut gamma_measured = self.gamma_measured;
