@@ -1,10 +1,11 @@
 //! Target `kb`: the knowledge-base reader (`prf learn --add … --into KB`) and what learning
 //! does with what it accepts.
 //!
-//! Input: a knowledge-base file, tried as it is (header, length and CRC-32 checks) and once
-//! more sealed — its length and CRC-32 rewritten — so that mutations reach the decoder and the
-//! state checks. An accepted learner must rebuild its fields and compile (or refuse to compile)
-//! without a panic, and what compiles must load in the runtime.
+//! Input: a knowledge-base file, tried as it is (header, length and CRC-32 checks, and the
+//! additions after the base with theirs) and once more sealed — the whole input made the base,
+//! its length and CRC-32 rewritten — so that mutations reach the decoder and the state checks.
+//! An accepted learner must rebuild its fields and compile (or refuse to compile) without a
+//! panic, and what compiles must load in the runtime.
 
 use prf_learn::compile;
 use prf_learn::learn::Learner;

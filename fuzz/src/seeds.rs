@@ -81,6 +81,9 @@ pub fn all(dataset: &Path) -> anyhow::Result<Vec<(&'static str, String, Vec<u8>)
     let ds = prf_files::dataset::Dataset::read(dataset, &model)?;
     let learner = Learner::new(&ds, &model, &LearnConfig::default())?;
     out.push(("kb", "empty.kb".into(), learner.save()));
+    // The same with an (empty) addition after the base, so that mutations reach the additions.
+    let appended = [learner.save(), learner.addition(&[])].concat();
+    out.push(("kb", "empty-addition.kb".into(), appended));
     for (kind, name, text) in [
         (0u8, "urdf.bin", EXAMPLE_URDF),
         (1, "spheres.bin", EXAMPLE_SPHERES),

@@ -7,7 +7,7 @@ mod common;
 use common::TempDir;
 use prf_files::dataset::Dataset;
 use prf_learn::kb::KbError;
-use prf_learn::learn::{LearnError, Learner, learn_into};
+use prf_learn::learn::{LearnError, Learner, learn_into, learn_lessons_into};
 use prf_learn::{LearnConfig, compile, learn};
 use prf_shared::robot::RobotModel;
 use prf_sim::demogen::generate_dataset;
@@ -64,6 +64,62 @@ fn a_saved_learner_adds_demonstrations_as_batch_learning_does() {
     let ids: Vec<&str> = loaded.ids().iter().map(|(id, _)| id.as_str()).collect();
     let expected: Vec<&str> = ds.demonstrations.iter().map(|d| d.id.as_str()).collect();
     assert_eq!(ids, expected);
+}
+
+/// `prf learn --add` appends an addition instead of rewriting the file: a knowledge base with
+/// additions loads as the learner that appended them (the same state, saved), and learns on
+/// to the batch blob; an addition cut short or corrupted is refused, naming where it starts.
+#[test]
+fn appended_additions_load_as_the_learner_that_appended_them() {
+    let ds = dataset();
+    let model = RobotModel::kmr_iiwa14();
+    let cfg = LearnConfig::default();
+    let batch = compile(&learn(ds, &model, &cfg, &|_| {}).unwrap()).unwrap();
+    let mut first = Learner::new(ds, &model, &cfg).unwrap();
+    learn_into(&mut first, &ds.demonstrations[..2], &|_| {}).unwrap();
+    let mut file = first.save();
+    let mut starts = Vec::new();
+    for range in [2..3, 3..5] {
+        let mut writer = Learner::load(&file).expect("load");
+        let (k, lessons) =
+            learn_lessons_into(&mut writer, &ds.demonstrations[range], &|_| {}).expect("learn");
+        starts.push(file.len());
+        file.extend(writer.addition(&lessons));
+        let mut reader = Learner::load(&file).expect("load with additions");
+        assert!(
+            reader.save() == writer.save(),
+            "the learner loaded is the learner that appended"
+        );
+        assert!(compile(&reader.knowledge(&|_| {})).unwrap() == compile(&k).unwrap());
+    }
+    let mut all = Learner::load(&file).unwrap();
+    assert!(
+        compile(&all.knowledge(&|_| {})).unwrap() == batch,
+        "2 learned, then 1 and 2 appended: the batch blob"
+    );
+    assert_eq!(all.demonstrations(), 5);
+
+    let load = |b: &[u8]| Learner::load(b).map(|_| ()).unwrap_err();
+    let e = load(&file[..file.len() - 1]);
+    assert!(
+        matches!(e, KbError::CutAddition { n: 2, at, .. } if at == starts[1]),
+        "{e}"
+    );
+    assert!(
+        Learner::load(&file[..starts[1]]).is_ok(),
+        "the bytes before a cut-short addition are the knowledge base before it"
+    );
+    assert!(matches!(
+        load(&file[..starts[0] + 5]),
+        KbError::CutAddition { n: 1, .. }
+    ));
+    let mut flipped = file.clone();
+    flipped[starts[1] + 100] ^= 0x20;
+    let e = load(&flipped);
+    assert!(
+        matches!(&e, KbError::Addition { n: 2, at, .. } if *at == starts[1]),
+        "{e}"
+    );
 }
 
 #[test]
@@ -141,15 +197,17 @@ fn unfit_datasets_and_bad_files_are_refused_with_a_reason() {
     assert!(matches!(load(&forged), KbError::Decode(_)));
 }
 
-/// The real binary: `prf learn A --kb KB`, then `prf learn --add B --into KB` gives the blob
-/// of `prf learn A+B`; adding B again is refused and leaves the knowledge base as it was.
+/// The real binary: `prf learn A --kb KB`, then `prf learn --add B --into KB` and `--add C`
+/// give the blob of `prf learn A+B+C`; adding B again is refused and leaves the knowledge base
+/// as it was.
 #[test]
 fn prf_learn_add_into_a_knowledge_base_gives_the_batch_blob() {
     let ds = dataset();
     let tmp = TempDir::new("kb");
     let dir = |n: &str| tmp.path().join(n);
     part(ds, 0..3).write(&dir("a")).unwrap();
-    part(ds, 3..5).write(&dir("b")).unwrap();
+    part(ds, 3..4).write(&dir("b")).unwrap();
+    part(ds, 4..5).write(&dir("c")).unwrap();
     ds.write(&dir("all")).unwrap();
     let prf = |args: &[&std::ffi::OsStr]| {
         Command::new(env!("CARGO_BIN_EXE_prf"))
@@ -176,20 +234,25 @@ fn prf_learn_add_into_a_knowledge_base_gives_the_batch_blob() {
         &os(&dir("a.blob")),
         "-q".as_ref(),
     ]));
-    let add_b = || {
+    let add = |what: &str| {
         prf(&[
             "learn".as_ref(),
             "--add".as_ref(),
-            &os(&dir("b")),
+            &os(&dir(what)),
             "--into".as_ref(),
             &os(&kb),
             "-o".as_ref(),
             &os(&blob),
         ])
     };
-    let said = ok(add_b());
-    println!("{said}");
-    assert!(said.contains("added 2 demonstration(s)"), "{said}");
+    // B's addition would outgrow half the base of 3 programs (the file is rewritten whole),
+    // C's fits beside the base of 4 (it is appended): both ways are taken.
+    for (what, written) in [("b", "rewritten whole"), ("c", "appended")] {
+        let said = ok(add(what));
+        println!("{said}");
+        assert!(said.contains("added 1 demonstration(s)"), "{said}");
+        assert!(said.contains(written), "{said}");
+    }
     ok(prf(&[
         "learn".as_ref(),
         &os(&dir("all")),
@@ -202,7 +265,7 @@ fn prf_learn_add_into_a_knowledge_base_gives_the_batch_blob() {
         "the batch blob"
     );
     let before = std::fs::read(&kb).unwrap();
-    let again = add_b();
+    let again = add("b");
     let err = String::from_utf8_lossy(&again.stderr);
     assert!(!again.status.success());
     assert!(err.contains("already in the knowledge base"), "{err}");

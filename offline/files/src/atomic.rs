@@ -2,7 +2,7 @@
 //! temporary file (or directory) beside the target, synced, and then renamed over it — a
 //! directory by exchanging the two atomically (`renameat2(RENAME_EXCHANGE)`). A full disk, a
 //! file-size limit or a killed process leaves the previous version intact; at worst a
-//! temporary `.prf-tmp-*` entry stays beside it.
+//! temporary `.prf-tmp-*` entry stays beside it. An append-only file grows by [`append`].
 
 use std::fs::File;
 use std::io::{self, Write};
@@ -51,6 +51,27 @@ pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> io::Result<()> {
     let mut tmp = temp_beside(path)?;
     tmp.write_all(bytes.as_ref())?;
     persist(tmp, path)
+}
+
+/// Appends `bytes` to the file at `path`, which must still be `len` bytes long (as read), and
+/// syncs it. A failed write is undone by cutting the file back to `len` bytes; a process killed
+/// mid-append leaves a cut-short tail, which a reader of an append-only format (a knowledge
+/// base's additions) detects by its length and CRC and reports.
+pub fn append(path: &Path, len: u64, bytes: &[u8]) -> io::Result<()> {
+    let mut f = std::fs::OpenOptions::new().append(true).open(path)?;
+    let now = f.metadata()?.len();
+    if now != len {
+        return Err(io::Error::other(format!(
+            "{} is {now} bytes, not the {len} read: changed while this command ran",
+            path.display()
+        )));
+    }
+    let written = f.write_all(bytes).and_then(|()| f.sync_data());
+    if written.is_err() {
+        // Best effort: the error reported is the write's.
+        let _ = f.set_len(len).and_then(|()| f.sync_data());
+    }
+    written
 }
 
 /// A file written by `fill` through a handle, placed at `path` only if `fill` succeeds.

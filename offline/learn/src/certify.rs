@@ -9,11 +9,13 @@
 //! A cell's certificates depend only on its corner nodes and on the spheres touching it, in
 //! order. So the next build of a sweep ([`Certified`]) re-decides only the cells one of whose
 //! corners is encoded differently, and the spheres added since: the result is the same bytes
-//! a build from nothing gives.
+//! a build from nothing gives. The cells are decided in parallel. A loaded knowledge base's
+//! sweep recovers these decisions from its field and spheres ([`Certified::recover`]).
 
 use crate::workspace::{LearnedField, SphereSample, WorkspaceConfig};
 use nalgebra::Vector3;
 use prf_shared::field::{BRICK, BRICK_NODES, CERT_BYTES, Field, Hint, MM, NODE_BYTES, UNIFORM};
+use rayon::prelude::*;
 
 /// How a node is encoded: its brick's uniform value (true), or its own bytes (false).
 pub type NodeToken = (bool, [u8; NODE_BYTES]);
@@ -88,6 +90,57 @@ pub struct Certified {
     settings: (f64, f64),
 }
 
+impl Certified {
+    /// The decisions the build of `learned` from `spheres` (the sweep's spheres then) left,
+    /// recovered from what a knowledge base keeps, without deciding anything: every list from
+    /// the cells each sphere touches, every cell's balls from the field's certificate records
+    /// (whose mm steps are the balls' own), the node encodings from the field. None for a
+    /// field that is not valid, or with a ball at the end of a record's range (clamped there,
+    /// so not the ball decided).
+    pub fn recover(
+        learned: &LearnedField,
+        spheres: &[SphereSample],
+        cfg: &WorkspaceConfig,
+    ) -> Option<Certified> {
+        let field = Field::new(&learned.data()).ok()?;
+        let [nx, ny, nz] = field.dims();
+        let n_cells = (nx - 1) * (ny - 1) * (nz - 1);
+        let mut balls = vec![Vec::new(); n_cells];
+        for r in learned.certificates.chunks_exact(CERT_BYTES) {
+            let cell = u32::from_le_bytes([r[0], r[1], r[2], r[3]]) as usize;
+            let k = |o: usize| i16::from_le_bytes([r[o], r[o + 1]]);
+            let centre = [k(4), k(6), k(8)];
+            if centre.iter().any(|v| *v == i16::MIN || *v == i16::MAX) {
+                return None;
+            }
+            let radius = u16::from_le_bytes([r[10], r[11]]);
+            balls.get_mut(cell)?.push((
+                Vector3::from(centre.map(|v| v as f64 * MM)),
+                radius as f64 * MM,
+            ));
+        }
+        let decide = Decide {
+            field,
+            cfg,
+            hint: Hint::default(),
+        };
+        let mut lists = vec![Vec::new(); n_cells];
+        for (i, s) in spheres.iter().enumerate() {
+            for cell in decide.cells_touched(s) {
+                lists[cell].push(i as u32);
+            }
+        }
+        Some(Certified {
+            grid: learned.grid(),
+            tokens: learned.node_tokens(),
+            spheres: lists,
+            balls,
+            done: spheres.len(),
+            settings: (cfg.certify_margin, cfg.epsilon),
+        })
+    }
+}
+
 /// The certificate records (cell, centre and radius in mm) of `learned`, whose certificates
 /// must still be empty, for the demonstrated `spheres`; `last` is what the previous build of
 /// the same sweep decided (its spheres a prefix of these), or None. Returns the records and
@@ -119,30 +172,43 @@ pub fn certificates(
             settings,
         },
     };
-    let mut decide = Decide {
+    // The cells one of whose corners changed have every sphere touching them decided anew;
+    // the spheres added since are decided in every cell they touch. A cell's decisions
+    // depend only on its own list, in order: the cells are decided in parallel.
+    let redo = if c.done > 0 {
+        cells_with_changed_corners(learned.dims, &c.tokens, &tokens)
+    } else {
+        vec![false; n_cells]
+    };
+    let decide = Decide {
         field,
         cfg,
         hint: Hint::default(),
     };
-    // The cells one of whose corners changed: every sphere touching them decided anew.
-    if c.done > 0 {
-        let redo = cells_with_changed_corners(learned.dims, &c.tokens, &tokens);
-        for (cell, redo) in redo.iter().enumerate() {
-            if *redo {
-                c.balls[cell].clear();
-                for &i in &c.spheres[cell] {
-                    decide.sphere_in_cell(&spheres[i as usize], cell, &mut c.balls[cell]);
-                }
-            }
-        }
-    }
-    // The spheres added since, in every cell they touch.
+    let old: Vec<usize> = c.spheres.iter().map(Vec::len).collect();
     for (i, s) in spheres.iter().enumerate().skip(c.done) {
         for cell in decide.cells_touched(s) {
             c.spheres[cell].push(i as u32);
-            decide.sphere_in_cell(s, cell, &mut c.balls[cell]);
         }
     }
+    c.spheres
+        .par_iter()
+        .zip(c.balls.par_iter_mut())
+        .enumerate()
+        .for_each_init(
+            || Decide { ..decide },
+            |decide, (cell, (list, balls))| {
+                let from = if redo[cell] {
+                    balls.clear();
+                    0
+                } else {
+                    old[cell]
+                };
+                for &i in &list[from..] {
+                    decide.sphere_in_cell(&spheres[i as usize], cell, balls);
+                }
+            },
+        );
     c.done = spheres.len();
     c.tokens = tokens;
     let mut out = Vec::new();

@@ -16,6 +16,8 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod journal;
+
 /// Settings of Learn.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LearnConfig {
@@ -206,7 +208,8 @@ fn line(k: usize) -> usize {
 }
 
 /// Alg. 3, lines 5–16 for one demonstration, with the location and part types named in
-/// `kinds` and `part_kinds`.
+/// `kinds` and `part_kinds`: its instances segmented per class, then each one's lesson (in
+/// parallel; in instance order, the first error in that order reported).
 fn lessons(
     model: &RobotModel,
     kinds: &[String],
@@ -221,75 +224,89 @@ fn lessons(
             demonstration: d.id.clone(),
             kind: d.task.part.kind.clone(),
         })?;
-    let mut out = Vec::new();
+    let mut instances = Vec::new();
     for m in CLASSES.iter() {
-        let mut instances = Vec::new();
-        m.segment(&d.samples, &mut |i| instances.push(i));
-        for inst in instances {
-            let location_type = inst
-                .location
-                .and_then(|l| kinds.iter().position(|k| *k == location_of(d, l).kind));
-            let fr = m.frames();
-            let affordance = match (
-                frame_pose(model, d, &inst, fr.robot)?,
-                frame_pose(model, d, &inst, fr.affordance)?,
-            ) {
-                (Some(r), Some(a)) => Some((fr.affordance, a.inverse() * r)),
-                _ => None,
-            };
-            let sweep = if m.learns_workspace() {
-                match (inst.location, fr.workspace) {
-                    (Some(l), Frame::Location) => {
-                        let loc = pose_from_array(location_of(d, l).pose).ok_or_else(|| {
-                            LearnError::BadPose {
-                                demonstration: d.id.clone(),
-                                what: "location",
-                            }
-                        })?;
-                        let s = &d.samples[inst.at];
-                        let path: Vec<[f64; 7]> = d.samples[inst.range.clone()]
-                            .iter()
-                            .map(|s| s.arm)
-                            .collect();
-                        let base = loc.inverse() * arm_base_pose(model, s.base);
-                        Some(Arc::new(SweptPath::new(Sweep::path_spheres(
-                            model,
-                            &base,
-                            &path,
-                            cfg.workspace.resample,
-                        ))))
-                    }
-                    _ => None,
-                }
-            } else {
-                None
-            };
-            let arm = match (&inst.arm, m.generators().iter().any(|g| g.learnable())) {
-                (Some(a), true) => {
-                    let (path, dt) = skills::uniform_path(&d.samples[a.forward.clone()]);
-                    let rdmp = skills::train(model, &path, dt, &cfg.dmp, cfg.min_manipulability)
-                        .map_err(|error| LearnError::Skill {
-                            demonstration: d.id.clone(),
-                            first: line(a.forward.start),
-                            last: line(a.forward.end - 1),
-                            class: m.name(),
-                            error,
-                        })?;
-                    Some((path, dt, rdmp))
-                }
-                _ => None,
-            };
-            out.push(Lesson {
-                class: m.name(),
-                location_type,
-                part_type,
-                affordance,
-                sweep,
-                arm,
-            });
-        }
+        m.segment(&d.samples, &mut |i| instances.push((*m, i)));
     }
-    Ok(out)
+    let per_instance: Vec<Result<Lesson, LearnError>> = instances
+        .into_par_iter()
+        .map(|(m, inst)| lesson(model, kinds, d, cfg, m, inst, part_type))
+        .collect();
+    per_instance.into_iter().collect()
+}
+
+/// The lesson of instance `inst` of class `m` in demonstration `d`: its affordance, the
+/// spheres it sweeps, its trained RDMP.
+fn lesson(
+    model: &RobotModel,
+    kinds: &[String],
+    d: &Demonstration,
+    cfg: &LearnConfig,
+    m: &'static dyn MotionClass,
+    inst: Instance,
+    part_type: usize,
+) -> Result<Lesson, LearnError> {
+    let location_type = inst
+        .location
+        .and_then(|l| kinds.iter().position(|k| *k == location_of(d, l).kind));
+    let fr = m.frames();
+    let affordance = match (
+        frame_pose(model, d, &inst, fr.robot)?,
+        frame_pose(model, d, &inst, fr.affordance)?,
+    ) {
+        (Some(r), Some(a)) => Some((fr.affordance, a.inverse() * r)),
+        _ => None,
+    };
+    let sweep = if m.learns_workspace() {
+        match (inst.location, fr.workspace) {
+            (Some(l), Frame::Location) => {
+                let loc =
+                    pose_from_array(location_of(d, l).pose).ok_or_else(|| LearnError::BadPose {
+                        demonstration: d.id.clone(),
+                        what: "location",
+                    })?;
+                let s = &d.samples[inst.at];
+                let path: Vec<[f64; 7]> = d.samples[inst.range.clone()]
+                    .iter()
+                    .map(|s| s.arm)
+                    .collect();
+                let base = loc.inverse() * arm_base_pose(model, s.base);
+                Some(Arc::new(SweptPath::new(Sweep::path_spheres(
+                    model,
+                    &base,
+                    &path,
+                    cfg.workspace.resample,
+                ))))
+            }
+            _ => None,
+        }
+    } else {
+        None
+    };
+    let arm = match (&inst.arm, m.generators().iter().any(|g| g.learnable())) {
+        (Some(a), true) => {
+            let (path, dt) = skills::uniform_path(&d.samples[a.forward.clone()]);
+            let rdmp = skills::train(model, &path, dt, &cfg.dmp, cfg.min_manipulability).map_err(
+                |error| LearnError::Skill {
+                    demonstration: d.id.clone(),
+                    first: line(a.forward.start),
+                    last: line(a.forward.end - 1),
+                    class: m.name(),
+                    error,
+                },
+            )?;
+            Some((path, dt, rdmp))
+        }
+        _ => None,
+    };
+    Ok(Lesson {
+        class: m.name(),
+        location_type,
+        part_type,
+        affordance,
+        sweep,
+        arm,
+    })
 }
 
 /// Location types in first-appearance order of the manifest.
@@ -349,6 +366,15 @@ pub fn learn_into(
     demos: &[Demonstration],
     progress: OnProgress<'_>,
 ) -> Result<Knowledge, LearnError> {
+    learn_lessons_into(learner, demos, progress).map(|(k, _)| k)
+}
+
+/// [`learn_into`], also giving the demonstrations' lessons (for [`Learner::addition`]).
+pub fn learn_lessons_into(
+    learner: &mut Learner,
+    demos: &[Demonstration],
+    progress: OnProgress<'_>,
+) -> Result<(Knowledge, Vec<Lessons>), LearnError> {
     progress(Progress::Total(
         (demos.len() + learner.location_kinds.len()) as u64,
     ));
@@ -376,7 +402,7 @@ pub fn learn_into(
         ("segment + train skills", t_segment),
         ("workspaces", t1.elapsed().as_secs_f64()),
     ];
-    Ok(knowledge)
+    Ok((knowledge, per_demo))
 }
 
 /// Learn (Alg. 3) one demonstration at a time: the state after the demonstrations added so
@@ -654,10 +680,21 @@ impl Learner {
         })
     }
 
-    /// The learner a knowledge-base file ([`Learner::save`]) holds.
+    /// The learner a knowledge-base file holds: the base [`Learner::save`] wrote, then each
+    /// addition after it ([`Learner::addition`]) replayed.
     pub fn load(bytes: &[u8]) -> Result<Self, crate::kb::KbError> {
+        let (st, additions) = crate::kb::decode(bytes)?;
+        let mut learner = Self::from_state(st)?;
+        for a in additions {
+            learner.replay(a)?;
+        }
+        learner.check_grids()?;
+        Ok(learner)
+    }
+
+    /// The learner of a knowledge base's base.
+    fn from_state(st: crate::kb::LearnerState) -> Result<Self, crate::kb::KbError> {
         use crate::kb::*;
-        let st = decode(bytes)?;
         let class = |name: &str| {
             CLASSES
                 .iter()
@@ -750,25 +787,6 @@ impl Learner {
 
         let robot = st.robot.model()?;
         let sweeps: Vec<Sweep> = st.sweeps.into_iter().map(Sweep::from_state).collect();
-        // The grid each type's next build allocates: its feature balls and its queued spheres.
-        let nodes = sweeps
-            .iter()
-            .zip(&st.pending)
-            .map(|(s, queued)| {
-                let more: Vec<_> = queued
-                    .iter()
-                    .flatten()
-                    .map(|(c, i)| (v(*c), robot.spheres[*i as usize].radius))
-                    .collect();
-                s.grid_nodes(&more, &st.config.workspace)
-            })
-            .max()
-            .unwrap_or(0);
-        if nodes > MAX_GRID_NODES {
-            return Err(KbError::Decode(format!(
-                "a workspace grid of {nodes} nodes (at most {MAX_GRID_NODES})"
-            )));
-        }
         Ok(Learner {
             robot,
             description: st.description,
@@ -805,6 +823,31 @@ impl Learner {
         })
     }
 
+    /// Refuses a learner whose next field build would allocate a grid over
+    /// [`MAX_GRID_NODES`]: per location type its feature balls and its queued spheres.
+    fn check_grids(&self) -> Result<(), crate::kb::KbError> {
+        let nodes = self
+            .sweeps
+            .iter()
+            .zip(&self.pending)
+            .map(|(s, queued)| {
+                let more: Vec<_> = queued
+                    .iter()
+                    .flat_map(|p| &p.spheres)
+                    .map(|p| (p.centre, self.robot.spheres[p.sphere as usize].radius))
+                    .collect();
+                s.grid_nodes(&more, &self.config.workspace)
+            })
+            .max()
+            .unwrap_or(0);
+        if nodes > MAX_GRID_NODES {
+            return Err(crate::kb::KbError::Decode(format!(
+                "a workspace grid of {nodes} nodes (at most {MAX_GRID_NODES})"
+            )));
+        }
+        Ok(())
+    }
+
     /// What was learned so far (Alg. 3's output, line 20's share() included): the fields of
     /// the location types touched since the last call are rebuilt (in parallel; `progress`
     /// is told of each), the others kept.
@@ -815,9 +858,14 @@ impl Learner {
             .sweeps
             .par_iter_mut()
             .zip(self.pending.par_iter_mut())
+            .zip(self.location_types.par_iter())
             .enumerate()
-            .filter(|(_, (_, pending))| !pending.is_empty())
-            .map(|(t, (sweep, pending))| {
+            .filter(|(_, ((_, pending), _))| !pending.is_empty())
+            .map(|(t, ((sweep, pending), known))| {
+                // The decisions of the last build, before its sweep grows.
+                if let Some(f) = &known.field {
+                    sweep.recover_certified(f, &wc);
+                }
                 let paths: Vec<&SweptPath> = pending.iter().map(|p| p.as_ref()).collect();
                 sweep.add_spheres(robot, &paths);
                 pending.clear();
@@ -873,7 +921,8 @@ fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
     let point = |c: &[f64; 3]| c.iter().all(|x| x.is_finite() && x.abs() <= 100.0);
     let ball = |(c, r): &([f64; 3], f64)| point(c) && *r > 0.0 && *r <= 1.0;
     for s in &st.sweeps {
-        if !s.spheres.iter().all(ball) || !s.features.iter().all(ball) {
+        let sample = |x: &workspace::SphereSample| ball(&(x.centre.into(), x.radius));
+        if !s.spheres.iter().all(sample) || !s.features.iter().all(ball) {
             return bad("a swept sphere");
         }
         if s.feature_spacing != w.feature_spacing {

@@ -179,23 +179,58 @@ impl Sweep {
     pub(crate) fn to_state(&self) -> crate::kb::SweepState {
         let v = |p: &Vector3<f64>| [p.x, p.y, p.z];
         crate::kb::SweepState {
-            spheres: self
-                .spheres
-                .iter()
-                .map(|s| (v(&s.centre), s.radius))
-                .collect(),
+            spheres: self.spheres.clone(),
             seen: self.seen.clone(),
             feature_spacing: self.feature_spacing,
             features: self.features.iter().map(|(c, r)| (v(c), *r)).collect(),
-            splat: self.splat.as_ref().map(|s| crate::kb::SplatState {
-                origin: v(&s.key.0),
-                dims: s.key.1,
-                grid: [s.key.2, s.key.3, s.key.4],
-                value: s.value.clone(),
-                feature: s.feature.clone(),
-                done: s.done,
-            }),
+            splat: self.splat_state(),
         }
+    }
+
+    /// Recovers the certificate decisions of the build that gave `field` from these spheres,
+    /// when the sweep has none (it was loaded: a knowledge base does not keep them), so that
+    /// the next build decides only what changed ([`Certified::recover`]).
+    pub(crate) fn recover_certified(&mut self, field: &LearnedField, cfg: &WorkspaceConfig) {
+        if self.certified.is_none() {
+            self.certified = Certified::recover(field, &self.spheres, cfg);
+        }
+    }
+
+    /// The last field build's splat as plain data.
+    pub(crate) fn splat_state(&self) -> Option<crate::kb::SplatState> {
+        let v = |p: &Vector3<f64>| [p.x, p.y, p.z];
+        self.splat.as_ref().map(|s| crate::kb::SplatState {
+            origin: v(&s.key.0),
+            dims: s.key.1,
+            grid: [s.key.2, s.key.3, s.key.4],
+            value: s.value.clone(),
+            feature: s.feature.clone(),
+            done: s.done,
+        })
+    }
+
+    /// The splat [`Sweep::splat_state`] gave, as the last field build's. One that does not fit
+    /// its grid or these feature balls is dropped (it is a cache: the next build splats
+    /// afresh, to the same values).
+    pub(crate) fn set_splat(&mut self, splat: Option<crate::kb::SplatState>) {
+        let v = |p: [f64; 3]| Vector3::new(p[0], p[1], p[2]);
+        let features = self.features.len();
+        self.splat = splat
+            .filter(|p| {
+                let n = p.dims.iter().fold(1usize, |n, d| n.saturating_mul(*d));
+                p.value.len() == n
+                    && p.feature.len() == n
+                    && p.done <= features
+                    && p.feature
+                        .iter()
+                        .all(|f| *f == u32::MAX || (*f as usize) < p.done)
+            })
+            .map(|p| Splat {
+                key: (v(p.origin), p.dims, p.grid[0], p.grid[1], p.grid[2]),
+                value: p.value,
+                feature: p.feature,
+                done: p.done,
+            });
     }
 
     /// Nodes of the grid a field build of this sweep would allocate with `cfg`, once the
@@ -214,20 +249,11 @@ impl Sweep {
         dims.iter().fold(1usize, |n, d| n.saturating_mul(*d))
     }
 
-    /// The sweep [`Sweep::to_state`] gave. A splat that does not fit its grid is dropped (it
-    /// is a cache: the next build splats afresh, to the same values).
+    /// The sweep [`Sweep::to_state`] gave ([`Sweep::set_splat`] for its splat).
     pub(crate) fn from_state(s: crate::kb::SweepState) -> Self {
         let v = |p: [f64; 3]| Vector3::new(p[0], p[1], p[2]);
-        let features = s.features.len();
-        Sweep {
-            spheres: s
-                .spheres
-                .into_iter()
-                .map(|(c, radius)| SphereSample {
-                    centre: v(c),
-                    radius,
-                })
-                .collect(),
+        let mut sweep = Sweep {
+            spheres: s.spheres,
             seen: {
                 // Sorted and unique as written; a file that is not gets its set restored.
                 let mut seen = s.seen;
@@ -245,26 +271,12 @@ impl Sweep {
                 .map(|(c, r)| feature_key(&v(*c), *r, s.feature_spacing))
                 .collect(),
             features: s.features.into_iter().map(|(c, r)| (v(c), r)).collect(),
-            splat: s
-                .splat
-                .filter(|p| {
-                    let n = p.dims.iter().fold(1usize, |n, d| n.saturating_mul(*d));
-                    p.value.len() == n
-                        && p.feature.len() == n
-                        && p.done <= features
-                        && p.feature
-                            .iter()
-                            .all(|f| *f == u32::MAX || (*f as usize) < p.done)
-                })
-                .map(|p| Splat {
-                    key: (v(p.origin), p.dims, p.grid[0], p.grid[1], p.grid[2]),
-                    value: p.value,
-                    feature: p.feature,
-                    done: p.done,
-                }),
+            splat: None,
             // A cache the file does not keep: the next build decides every cell.
             certified: None,
-        }
+        };
+        sweep.set_splat(s.splat);
+        sweep
     }
 
     /// Adds the spheres of `paths` not seen yet, in their order: a sphere is new when no

@@ -4,7 +4,7 @@ use crate::cli::progress::Bar;
 use anyhow::Context;
 use prf_files::dataset::Dataset;
 use prf_files::robot;
-use prf_learn::learn::{Learner, fingerprint, learn_into, skills_per_class};
+use prf_learn::learn::{Learner, fingerprint, learn_into, learn_lessons_into, skills_per_class};
 use prf_learn::{LearnConfig, compile, report};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -45,8 +45,9 @@ pub struct Args {
     pub kb: Option<PathBuf>,
     /// Fold the demonstrations of these datasets (each a directory as `prf gen` writes, of
     /// the same cell) into the knowledge base `--into`, in order, without learning the rest
-    /// again: only the fields of the location types they touch are rebuilt. Writes the
-    /// updated knowledge base and the blob (`-o`).
+    /// again: only the fields of the location types they touch are rebuilt. Writes the blob
+    /// (`-o`) and appends the addition to the knowledge base (rewritten whole instead once
+    /// its additions would outgrow half of it).
     #[arg(long, num_args = 1.., requires = "into", value_name = "DATASET")]
     pub add: Vec<PathBuf>,
     /// The knowledge base `--add` updates (written by `prf learn DATASET --kb FILE`).
@@ -136,10 +137,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 }
 
 /// `prf learn --add DATASET… --into KB`: the knowledge base, the new demonstrations folded in,
-/// the blob compiled; both written whole or not at all.
+/// the blob compiled and written whole or not at all, the addition appended ([`write_kb`]).
 fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let bytes = std::fs::read(kb).with_context(|| format!("reading {}", kb.display()))?;
+    let bytes = map(kb).with_context(|| format!("reading {}", kb.display()))?;
     let mut learner = Learner::load(&bytes).with_context(|| format!("reading {}", kb.display()))?;
     let t_load = t0.elapsed().as_secs_f64();
     let before = learner.demonstrations();
@@ -162,7 +163,7 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
         }
     }
     let t1 = Instant::now();
-    let k = learn_into(&mut learner, &demos, &|_| {})?;
+    let (k, lessons) = learn_lessons_into(&mut learner, &demos, &|_| {})?;
     let t_learn = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
     let blob = compile(&k)?;
@@ -170,7 +171,7 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
     let t3 = Instant::now();
     prf_files::atomic::write(&a.output, &blob)
         .with_context(|| format!("writing {}", a.output.display()))?;
-    prf_files::atomic::write(kb, learner.save())
+    let kb_write = write_kb(kb, &bytes, &learner, &lessons)
         .with_context(|| format!("writing {}", kb.display()))?;
     let t_write = t3.elapsed().as_secs_f64();
     if !a.quiet {
@@ -194,7 +195,53 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
                 .join(", "),
             t0.elapsed().as_secs_f64()
         );
-        println!("wrote {} and {}", a.output.display(), kb.display());
+        println!("wrote {}; {}: {kb_write}", a.output.display(), kb.display());
     }
     Ok(())
+}
+
+/// The file at `path`, mapped read-only (a knowledge base is read once, in place, instead of
+/// copied: the copy and its page faults were a fifth of `--add`). It is only appended to or
+/// replaced by renaming while mapped, so the mapped bytes do not change.
+fn map(path: &std::path::Path) -> std::io::Result<memmap2::Mmap> {
+    let f = std::fs::File::open(path)?;
+    // SAFETY: the mapping is private to this process and read-only; this command changes the
+    // file only by appending past the mapped length or renaming a new file over it. Another
+    // process truncating it meanwhile would be a concurrent `prf learn --into` on the same
+    // knowledge base, which nothing supports.
+    #[allow(unsafe_code)]
+    unsafe {
+        memmap2::Mmap::map(&f)
+    }
+}
+
+/// Writes the knowledge base `kb` (read as `read`) after `lessons` were added: their addition
+/// appended, or — once the additions would outgrow half the base, whose load they slow —
+/// the whole state rewritten as a new base. Says which.
+fn write_kb(
+    kb: &std::path::Path,
+    read: &[u8],
+    learner: &Learner,
+    lessons: &[prf_learn::learn::Lessons],
+) -> std::io::Result<String> {
+    let base = prf_learn::kb::base_len(read).unwrap_or(0);
+    let record = learner.addition(lessons);
+    let additions = read.len().saturating_sub(base) + record.len();
+    let mb = |n: usize| n as f64 / 1e6;
+    if additions > base / 2 {
+        let whole = learner.save();
+        prf_files::atomic::write(kb, &whole)?;
+        return Ok(format!(
+            "rewritten whole ({:.1} MB; its additions would have been {:.1} MB)",
+            mb(whole.len()),
+            mb(additions)
+        ));
+    }
+    prf_files::atomic::append(kb, read.len() as u64, &record)?;
+    Ok(format!(
+        "appended {:.2} MB (additions now {:.1} MB after a {:.1} MB base)",
+        mb(record.len()),
+        mb(additions),
+        mb(base)
+    ))
 }

@@ -1,0 +1,171 @@
+//! A knowledge base's additions ([`crate::kb`]): `prf learn --add` appends the lessons of the
+//! programs it added and the fields it rebuilt, instead of rewriting the whole file; loading
+//! replays them, so the learner loaded is the learner that appended.
+
+use super::{Learner, Lesson, Lessons};
+use crate::kb::{
+    AdditionState, ArmState, FRAMES, KbError, LessonState, LessonsState, PathSpheres, RdmpState,
+    encode_addition, pose_of, pose_state,
+};
+use crate::workspace::{PathSphere, SweptPath};
+use prf_shared::motion::CLASSES;
+use std::sync::Arc;
+
+impl Learner {
+    /// The addition record of `lessons`, each already [`Learner::add`]ed, to append to the
+    /// knowledge base this learner was loaded from or saved to. It holds the lessons and,
+    /// for every location type they swept whose queue [`Learner::knowledge`] has since
+    /// emptied, the field and splat of that build; a type still queued is rebuilt after
+    /// loading, as it would be here.
+    pub fn addition(&self, lessons: &[Lessons]) -> Vec<u8> {
+        let mut touched: Vec<usize> = lessons
+            .iter()
+            .flat_map(|l| &l.lessons)
+            .filter(|l| l.sweep.is_some())
+            .filter_map(|l| l.location_type)
+            .collect();
+        touched.sort_unstable();
+        touched.dedup();
+        encode_addition(&AdditionState {
+            lessons: lessons.iter().map(lessons_state).collect(),
+            rebuilt: touched
+                .into_iter()
+                .filter(|&t| self.pending[t].is_empty())
+                .map(|t| {
+                    let field = self.location_types[t].field.clone();
+                    (t, field, self.sweeps[t].splat_state())
+                })
+                .collect(),
+        })
+    }
+
+    /// Replays an addition: its lessons added in order, then each rebuilt type's queue moved
+    /// into its sweep and the field and splat of the build installed.
+    pub(super) fn replay(&mut self, a: AdditionState) -> Result<(), KbError> {
+        for l in a.lessons {
+            let lessons = self.lessons_of(l)?;
+            self.add(&lessons);
+        }
+        for (t, field, splat) in a.rebuilt {
+            if t >= self.sweeps.len() {
+                return Err(KbError::Decode(format!(
+                    "an addition rebuilt location type {t} of {}",
+                    self.sweeps.len()
+                )));
+            }
+            let paths: Vec<&SweptPath> = self.pending[t].iter().map(|p| p.as_ref()).collect();
+            self.sweeps[t].add_spheres(&self.robot, &paths);
+            self.pending[t].clear();
+            self.sweeps[t].set_splat(splat);
+            self.location_types[t].field = field;
+        }
+        Ok(())
+    }
+
+    /// The lessons an addition holds, checked against this learner: a known class, its
+    /// location and part types, finite poses, swept spheres finite within 100 m of robot
+    /// spheres that exist, a whole RDMP.
+    fn lessons_of(&self, st: LessonsState) -> Result<Lessons, KbError> {
+        let bad = |what: &str| {
+            KbError::Decode(format!(
+                "{what} out of range in the lessons of {}",
+                st.demonstration
+            ))
+        };
+        let mut lessons = Vec::with_capacity(st.lessons.len());
+        for l in &st.lessons {
+            let class = CLASSES
+                .iter()
+                .map(|c| c.name())
+                .find(|n| *n == l.class)
+                .ok_or_else(|| KbError::Class(l.class.clone()))?;
+            if l.location_type
+                .is_some_and(|t| t >= self.location_types.len())
+                || l.part_type >= self.part_types.len()
+            {
+                return Err(bad("a location or part type"));
+            }
+            let affordance = match l.affordance {
+                Some((f, p)) => {
+                    let frame = *FRAMES.get(f as usize).ok_or_else(|| bad("a frame"))?;
+                    Some((frame, pose_of(p)?))
+                }
+                None => None,
+            };
+            let point = |c: &[f64; 3]| c.iter().all(|x| x.is_finite() && x.abs() <= 100.0);
+            let n_spheres = self.robot.spheres.len();
+            let sweep = match &l.sweep {
+                Some(PathSpheres(s)) => {
+                    if !s.iter().all(|(c, i)| point(c) && (*i as usize) < n_spheres) {
+                        return Err(bad("a swept sphere"));
+                    }
+                    let spheres = s
+                        .iter()
+                        .map(|(c, sphere)| PathSphere {
+                            centre: nalgebra::Vector3::new(c[0], c[1], c[2]),
+                            sphere: *sphere,
+                        })
+                        .collect();
+                    Some(Arc::new(SweptPath::new(spheres)))
+                }
+                None => None,
+            };
+            let arm = match &l.arm {
+                Some(a) => Some((
+                    a.path.clone(),
+                    a.dt,
+                    a.rdmp.rdmp().ok_or_else(|| bad("an RDMP's weights"))?,
+                )),
+                None => None,
+            };
+            lessons.push(Lesson {
+                class,
+                location_type: l.location_type,
+                part_type: l.part_type,
+                affordance,
+                sweep,
+                arm,
+            });
+        }
+        Ok(Lessons {
+            demonstration: st.demonstration,
+            fingerprint: st.fingerprint,
+            lessons,
+        })
+    }
+}
+
+/// `l` as plain data.
+fn lessons_state(l: &Lessons) -> LessonsState {
+    LessonsState {
+        demonstration: l.demonstration.clone(),
+        fingerprint: l.fingerprint,
+        lessons: l
+            .lessons
+            .iter()
+            .map(|l| LessonState {
+                class: l.class.to_string(),
+                location_type: l.location_type,
+                part_type: l.part_type,
+                affordance: l.affordance.map(|(f, p)| {
+                    // Every frame is one of FRAMES.
+                    let frame = FRAMES.iter().position(|g| *g == f).unwrap_or_default();
+                    (frame as u8, pose_state(&p))
+                }),
+                sweep: l.sweep.as_ref().map(|s| {
+                    PathSpheres(
+                        s.spheres
+                            .iter()
+                            .map(|p| ([p.centre.x, p.centre.y, p.centre.z], p.sphere))
+                            .collect(),
+                    )
+                }),
+                arm: l.arm.as_ref().map(|(path, dt, rdmp)| ArmState {
+                    rdmp: RdmpState::of(rdmp),
+                    path: path.clone(),
+                    dt: *dt,
+                }),
+            })
+            .collect(),
+    }
+}
