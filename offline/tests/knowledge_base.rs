@@ -99,6 +99,18 @@ fn appended_additions_load_as_the_learner_that_appended_them() {
     );
     assert_eq!(all.demonstrations(), 5);
 
+    // Additions go after a version-3 base only, and while they stay within half of it.
+    use prf_learn::kb::rewrite_instead;
+    let base = first.save();
+    assert_eq!(rewrite_instead(&base, base.len() / 2), None);
+    let over = rewrite_instead(&base, base.len() / 2 + 1).unwrap_or_default();
+    assert!(over.contains("over half"), "{over}");
+    let mut v2 = base.clone();
+    v2[6] = 2;
+    assert!(Learner::load(&v2).is_ok(), "a version-2 file is read");
+    let why = rewrite_instead(&v2, 1).unwrap_or_default();
+    assert!(why.contains("version-2 layout takes no additions"), "{why}");
+
     let load = |b: &[u8]| Learner::load(b).map(|_| ()).unwrap_err();
     let e = load(&file[..file.len() - 1]);
     assert!(

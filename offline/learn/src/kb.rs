@@ -390,18 +390,6 @@ fn f64_at(b: &[u8], i: usize) -> f64 {
     f64::from_le_bytes(core::array::from_fn(|k| b[8 * i + k]))
 }
 
-impl Record for ([f64; 3], f64) {
-    const SIZE: usize = 32;
-    fn put(&self, out: &mut Vec<u8>) {
-        for v in self.0.iter().chain([&self.1]) {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-    }
-    fn get(b: &[u8]) -> Self {
-        ([f64_at(b, 0), f64_at(b, 1), f64_at(b, 2)], f64_at(b, 3))
-    }
-}
-
 /// Centre x, y, z and radius: decoded straight into the sweep's own type (no second copy of
 /// the example cell's 38 MB of swept spheres).
 impl Record for crate::workspace::SphereSample {
@@ -530,6 +518,26 @@ pub fn base_len(bytes: &[u8]) -> Option<usize> {
         return None;
     }
     Some(HEADER.saturating_add(u64_at(bytes, 10).min(usize::MAX as u64) as usize))
+}
+
+/// Why an addition of `addition` bytes should not be appended to the knowledge base `read`
+/// but the whole state rewritten as a new base, or None when it may be appended: the base's
+/// layout must take additions (version 3), and the additions, this one included, must stay
+/// within half the base (beyond, replaying them would slow every load more than one rewrite).
+pub fn rewrite_instead(read: &[u8], addition: usize) -> Option<String> {
+    let base = base_len(read)?;
+    let version = u32_at(read, 6);
+    if version < 3 {
+        return Some(format!("its version-{version} layout takes no additions"));
+    }
+    let additions = read.len().saturating_sub(base).saturating_add(addition);
+    (additions > base / 2).then(|| {
+        format!(
+            "its additions would have been {:.1} MB, over half its {:.1} MB base",
+            additions as f64 / 1e6,
+            base as f64 / 1e6
+        )
+    })
 }
 
 fn u64_at(b: &[u8], i: usize) -> u64 {

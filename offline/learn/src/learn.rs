@@ -918,7 +918,7 @@ fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
     if !settings {
         return bad("a workspace setting");
     }
-    let point = |c: &[f64; 3]| c.iter().all(|x| x.is_finite() && x.abs() <= 100.0);
+    let point = within_100_m;
     let ball = |(c, r): &([f64; 3], f64)| point(c) && *r > 0.0 && *r <= 1.0;
     for s in &st.sweeps {
         let sample = |x: &workspace::SphereSample| ball(&(x.centre.into(), x.radius));
@@ -938,6 +938,11 @@ fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
         return bad("a queued sphere");
     }
     Ok(())
+}
+
+/// Whether a swept sphere's centre in a knowledge base is finite and within 100 m.
+fn within_100_m(c: &[f64; 3]) -> bool {
+    c.iter().all(|x| x.is_finite() && x.abs() <= 100.0)
 }
 
 /// CRC-32 of a demonstration's trajectory (every sample's bits): the same program has the

@@ -216,32 +216,30 @@ fn map(path: &std::path::Path) -> std::io::Result<memmap2::Mmap> {
 }
 
 /// Writes the knowledge base `kb` (read as `read`) after `lessons` were added: their addition
-/// appended, or — once the additions would outgrow half the base, whose load they slow —
-/// the whole state rewritten as a new base. Says which.
+/// appended, or the whole state rewritten as a new base when [`prf_learn::kb::rewrite_instead`]
+/// says why. Says which.
 fn write_kb(
     kb: &std::path::Path,
     read: &[u8],
     learner: &Learner,
     lessons: &[prf_learn::learn::Lessons],
 ) -> std::io::Result<String> {
-    let base = prf_learn::kb::base_len(read).unwrap_or(0);
     let record = learner.addition(lessons);
-    let additions = read.len().saturating_sub(base) + record.len();
     let mb = |n: usize| n as f64 / 1e6;
-    if additions > base / 2 {
+    if let Some(why) = prf_learn::kb::rewrite_instead(read, record.len()) {
         let whole = learner.save();
         prf_files::atomic::write(kb, &whole)?;
         return Ok(format!(
-            "rewritten whole ({:.1} MB; its additions would have been {:.1} MB)",
-            mb(whole.len()),
-            mb(additions)
+            "rewritten whole ({:.1} MB): {why}",
+            mb(whole.len())
         ));
     }
     prf_files::atomic::append(kb, read.len() as u64, &record)?;
+    let base = prf_learn::kb::base_len(read).unwrap_or(0);
     Ok(format!(
         "appended {:.2} MB (additions now {:.1} MB after a {:.1} MB base)",
         mb(record.len()),
-        mb(additions),
+        mb(read.len().saturating_sub(base) + record.len()),
         mb(base)
     ))
 }

@@ -2,7 +2,7 @@
 //! programs it added and the fields it rebuilt, instead of rewriting the whole file; loading
 //! replays them, so the learner loaded is the learner that appended.
 
-use super::{Learner, Lesson, Lessons};
+use super::{Learner, Lesson, Lessons, within_100_m};
 use crate::kb::{
     AdditionState, ArmState, FRAMES, KbError, LessonState, LessonsState, PathSpheres, RdmpState,
     encode_addition, pose_of, pose_state,
@@ -92,11 +92,13 @@ impl Learner {
                 }
                 None => None,
             };
-            let point = |c: &[f64; 3]| c.iter().all(|x| x.is_finite() && x.abs() <= 100.0);
             let n_spheres = self.robot.spheres.len();
             let sweep = match &l.sweep {
                 Some(PathSpheres(s)) => {
-                    if !s.iter().all(|(c, i)| point(c) && (*i as usize) < n_spheres) {
+                    if !s
+                        .iter()
+                        .all(|(c, i)| within_100_m(c) && (*i as usize) < n_spheres)
+                    {
                         return Err(bad("a swept sphere"));
                     }
                     let spheres = s
