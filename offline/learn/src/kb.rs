@@ -457,6 +457,7 @@ impl Record for u32 {
 /// `#[serde(with = "records")]`: a `Vec` of [`Record`]s as one byte string.
 mod records {
     use super::Record;
+    use rayon::prelude::*;
     use serde::de::Error;
     use serde::{Deserialize, Deserializer, Serializer};
 
@@ -468,7 +469,9 @@ mod records {
         s.serialize_bytes(&out)
     }
 
-    pub fn deserialize<'de, D: Deserializer<'de>, T: Record>(d: D) -> Result<Vec<T>, D::Error> {
+    pub fn deserialize<'de, D: Deserializer<'de>, T: Record + Send>(
+        d: D,
+    ) -> Result<Vec<T>, D::Error> {
         let b = <&[u8]>::deserialize(d)?;
         if b.len() % T::SIZE != 0 {
             return Err(D::Error::custom(format!(
@@ -477,7 +480,9 @@ mod records {
                 T::SIZE
             )));
         }
-        Ok(b.chunks_exact(T::SIZE).map(T::get).collect())
+        // In parallel, in place: the example cell's 1.2 M swept spheres and keys are most of
+        // what reading a knowledge base costs.
+        Ok(b.par_chunks_exact(T::SIZE).map(T::get).collect())
     }
 }
 
