@@ -119,17 +119,8 @@ impl Certified {
                 radius as f64 * MM,
             ));
         }
-        let decide = Decide {
-            field,
-            cfg,
-            hint: Hint::default(),
-        };
         let mut lists = vec![Vec::new(); n_cells];
-        for (i, s) in spheres.iter().enumerate() {
-            for cell in decide.cells_touched(s) {
-                lists[cell].push(i as u32);
-            }
-        }
+        Decide::new(field, cfg).list(&mut lists, spheres, 0);
         Some(Certified {
             grid: learned.grid(),
             tokens: learned.node_tokens(),
@@ -180,23 +171,15 @@ pub fn certificates(
     } else {
         vec![false; n_cells]
     };
-    let decide = Decide {
-        field,
-        cfg,
-        hint: Hint::default(),
-    };
+    let decide = Decide::new(field, cfg);
     let old: Vec<usize> = c.spheres.iter().map(Vec::len).collect();
-    for (i, s) in spheres.iter().enumerate().skip(c.done) {
-        for cell in decide.cells_touched(s) {
-            c.spheres[cell].push(i as u32);
-        }
-    }
+    decide.list(&mut c.spheres, spheres, c.done);
     c.spheres
         .par_iter()
         .zip(c.balls.par_iter_mut())
         .enumerate()
         .for_each_init(
-            || Decide { ..decide },
+            || decide,
             |decide, (cell, (list, balls))| {
                 let from = if redo[cell] {
                     balls.clear();
@@ -227,13 +210,31 @@ pub fn certificates(
 }
 
 /// The decision for one sphere in one cell, on an encoded field without certificates.
+#[derive(Clone, Copy)]
 struct Decide<'a> {
     field: Field<'a>,
     cfg: &'a WorkspaceConfig,
     hint: Hint,
 }
 
-impl Decide<'_> {
+impl<'a> Decide<'a> {
+    fn new(field: Field<'a>, cfg: &'a WorkspaceConfig) -> Self {
+        Decide {
+            field,
+            cfg,
+            hint: Hint::default(),
+        }
+    }
+
+    /// Appends to each cell's list the spheres from index `from` on that touch it, in order.
+    fn list(&self, lists: &mut [Vec<u32>], spheres: &[SphereSample], from: usize) {
+        for (i, s) in spheres.iter().enumerate().skip(from) {
+            for cell in self.cells_touched(s) {
+                lists[cell].push(i as u32);
+            }
+        }
+    }
+
     /// Cell (i, j, k) of a cell index ([`Field::cell_index`]).
     fn cell(&self, index: usize) -> [usize; 3] {
         let [_, ny, nz] = self.field.dims().map(|n| n - 1);
