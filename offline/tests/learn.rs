@@ -5,7 +5,7 @@
 mod common;
 
 use common::TempDir;
-use nalgebra::Vector3;
+use nalgebra::{Translation3, Vector3};
 use prf_files::dataset::{Dataset, Demonstration};
 use prf_learn::compile;
 use prf_learn::workspace::Sweep;
@@ -566,6 +566,63 @@ fn anchored_lookups_agree_with_full_lookups() {
     assert!(
         skipped > lookups / 4,
         "{skipped} of {lookups} lookups settled by their anchor"
+    );
+}
+
+/// Lookups skipped by the travel bound (a sphere that cannot have left its anchor's room since
+/// its last lookup) give the risk and the excess of lookups that place every sphere, bit for
+/// bit after every configuration: along demonstrated paths, the same with the arm base pushed
+/// 0–15 cm (risky: the level rises), with every other configuration dropped (jumps), and with
+/// the base changed halfway (every leash untied). The hints end the same, too.
+#[test]
+fn lookups_skipped_by_travel_agree_with_placing_every_sphere() {
+    use prf_shared::field::Lookups;
+    let f = fixture();
+    let mut rng = StdRng::seed_from_u64(11);
+    let (mut configurations, mut risky) = (0usize, 0usize);
+    let (mut total_placed, mut total_leashed) = (0u64, 0u64);
+    for d in f.dataset.demonstrations.iter().step_by(3) {
+        for (t, base, path) in arm_instances(f, d) {
+            let travelled = workspace(f, t).lookups(Lookups::Travelled);
+            let anchored = workspace(f, t).lookups(Lookups::Anchored);
+            let push = Translation3::new(
+                rng.random_range(-0.15..0.15),
+                rng.random_range(-0.15..0.15),
+                rng.random_range(-0.15..0.15),
+            );
+            for (pushed, stride) in [(false, 1), (true, 1), (true, 2)] {
+                let base = if pushed { push * base } else { base };
+                let moved = Translation3::new(0.0, 0.01, 0.0) * base;
+                let (mut a, mut b) = (RiskAccumulator::default(), RiskAccumulator::default());
+                for (i, q) in path.iter().enumerate().step_by(stride) {
+                    let base = if i < path.len() / 2 { &base } else { &moved };
+                    let kin = ArmKinematics::new(&f.model, &JointVector::from(*q));
+                    let (ra, rb) = (
+                        a.add(&f.model, &travelled, base, &kin),
+                        b.add(&f.model, &anchored, base, &kin),
+                    );
+                    assert_eq!(ra.to_bits(), rb.to_bits(), "configuration {i}");
+                    assert_eq!(
+                        a.excess().to_bits(),
+                        b.excess().to_bits(),
+                        "configuration {i}"
+                    );
+                    configurations += 1;
+                }
+                let (placed, leashed) = a.counts();
+                assert_eq!(b.counts().1, 0);
+                (total_placed, total_leashed) = (total_placed + placed, total_leashed + leashed);
+                risky += usize::from(a.risk() > 0.0);
+            }
+        }
+    }
+    assert!(
+        configurations > 10_000 && risky > 10,
+        "{configurations} configurations, {risky} risky paths"
+    );
+    assert!(
+        total_leashed > total_placed,
+        "{total_leashed} spheres settled by their leash, {total_placed} placed"
     );
 }
 

@@ -364,31 +364,38 @@ fn skill_plan_equals_the_brute_force_grid() {
     );
 }
 
-/// Anchored lookups change how much of the field is read, never a plan: every task of the
-/// example cell on the full knowledge base (risk-0 plans), and on the reduced one with the
-/// parts moved 2 cm and 8° (risky plans, rising levels), plans the same with them off.
+/// Anchored lookups, and lookups skipped by the travel bound, change how much of the field is
+/// read, never a plan: every task of the example cell on the full knowledge base (risk-0
+/// plans), and on the reduced one with the parts moved 2 cm and 8° (risky plans, rising
+/// levels), plans the same with each of [`Lookups`] as with every lookup reading the field.
 #[test]
-fn anchored_lookups_leave_every_plan_unchanged() {
+fn lookup_shortcuts_leave_every_plan_unchanged() {
+    use prf_shared::field::Lookups;
     let reduced = reduced_blob(&World::example());
     for (bytes, world) in [
         (full_blob(), World::example()),
         (&reduced[..], shifted_world(0.02, 8.0)),
     ] {
-        let anchored = Runtime::load(bytes).unwrap();
-        let config = prf_runtime::RuntimeConfig {
-            anchored_lookups: false,
-            ..Default::default()
+        let with = |lookups| {
+            let config = prf_runtime::RuntimeConfig {
+                lookups,
+                ..Default::default()
+            };
+            Runtime::load_with(bytes, config).unwrap()
         };
-        let every = Runtime::load_with(bytes, config).unwrap();
-        for ft in world_tasks(&world) {
-            match (plan(&anchored, &ft.task()), plan(&every, &ft.task())) {
-                (Ok(a), Ok(b)) => {
-                    let label = ft.label();
-                    assert_eq!(a.skills.j.to_bits(), b.skills.j.to_bits(), "{label}");
-                    assert_eq!(a.skills.choice, b.skills.choice, "{label}");
-                    assert_eq!(a.skills.stats.steps, b.skills.stats.steps, "{label}");
+        let every = with(Lookups::Full);
+        for lookups in [Lookups::Anchored, Lookups::Travelled] {
+            let shortcut = with(lookups);
+            for ft in world_tasks(&world) {
+                match (plan(&shortcut, &ft.task()), plan(&every, &ft.task())) {
+                    (Ok(a), Ok(b)) => {
+                        let label = format!("{} ({lookups:?})", ft.label());
+                        assert_eq!(a.skills.j.to_bits(), b.skills.j.to_bits(), "{label}");
+                        assert_eq!(a.skills.choice, b.skills.choice, "{label}");
+                        assert_eq!(a.skills.stats.steps, b.skills.stats.steps, "{label}");
+                    }
+                    (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{}", ft.label()),
                 }
-                (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{}", ft.label()),
             }
         }
     }

@@ -1,7 +1,7 @@
 //! Loading a blob: validate it once and index it in place (no copy of fields or weights).
 
 use prf_shared::blob::{Blob, BlobError};
-use prf_shared::field::Field;
+use prf_shared::field::{Field, Lookups};
 use prf_shared::limits::MotionLimits;
 use prf_shared::motion::{self, MotionClass};
 use prf_shared::rdmp::{Rdmp, RdmpConfig};
@@ -51,9 +51,10 @@ pub struct RuntimeConfig {
     pub risk_threshold: f64,
     /// The work skill planning may do per task (default: unlimited; the firmware sets one).
     pub plan_budget: crate::skill_plan::PlanBudget,
-    /// Risk lookups may be settled by the anchor of the sphere's last lookup (default); off,
-    /// every lookup reads the field (the benchmark's baseline). Risks are the same either way.
-    pub anchored_lookups: bool,
+    /// How risk lookups may be settled without reading the field (default
+    /// [`Lookups::Travelled`]; the others are the benchmark's baselines). Risks are the same
+    /// with each.
+    pub lookups: Lookups,
 }
 
 impl Default for RuntimeConfig {
@@ -62,7 +63,7 @@ impl Default for RuntimeConfig {
             rdmp: RdmpConfig::default(),
             risk_threshold: 0.0,
             plan_budget: crate::skill_plan::PlanBudget::UNLIMITED,
-            anchored_lookups: true,
+            lookups: Lookups::Travelled,
         }
     }
 }
@@ -144,7 +145,7 @@ impl<'a> Runtime<'a> {
                         location_type: t,
                         error,
                     })?
-                    .anchored(self.config.anchored_lookups),
+                    .lookups(self.config.lookups),
             )),
             None => Ok(None),
         }

@@ -54,7 +54,39 @@ pub trait DistanceField {
         let _ = (stop, hint);
         self.distance(p)
     }
+
+    /// How far a point may move from `p` while every later lookup of it with a stop ≥ `stop`
+    /// is settled by `hint` without reading the field, returning [`Hint::settled`] and leaving
+    /// `hint` as it is; 0 if that is not known. Call it after the lookup at `p` that
+    /// left `hint`.
+    fn settled_within(&self, p: &Vector3<f64>, stop: f64, hint: &Hint) -> f64 {
+        let _ = (p, stop, hint);
+        0.0
+    }
+
+    /// Whether [`DistanceField::settled_within`] may give any room at all (if not, callers
+    /// need not bound how far their points move).
+    fn settles_by_travel(&self) -> bool {
+        false
+    }
 }
+
+/// How lookups may be settled without reading the field.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lookups {
+    /// Every lookup reads the field (the benchmarks' first baseline).
+    Full,
+    /// A lookup may be settled by its hint's anchor ([`Hint`]).
+    Anchored,
+    /// As [`Lookups::Anchored`], and a caller that bounds how far a point moved may skip its
+    /// lookup altogether while the anchor would settle it
+    /// ([`DistanceField::settled_within`]; the default).
+    Travelled,
+}
+
+/// Kept below the room [`DistanceField::settled_within`] gives, m: far above the rounding of
+/// the centres and of the travel bounds (about 1e-13 m), far below any slack that matters.
+pub const TRAVEL_MARGIN: f64 = 1e-9;
 
 /// The lookup term that settled the last lookup of a point (a sphere centre along a
 /// trajectory): its cell and term (1–8: a corner; 9 + i: certificate i; 0: none). The next
@@ -79,6 +111,13 @@ pub struct Hint {
     corner: Vector3<f64>,
     /// s_a.
     stop: f64,
+}
+
+impl Hint {
+    /// What a lookup settled by the anchor returns: s_a.
+    pub fn settled(&self) -> f64 {
+        self.stop
+    }
 }
 
 /// Serialized form of a field (postcard); the byte arrays are borrowed from the blob.
@@ -156,6 +195,8 @@ pub struct Field<'a> {
     certificates: &'a [u8],
     /// Whether lookups may be settled by their hint's anchor (see [`Hint`]).
     anchored: bool,
+    /// Whether [`DistanceField::settled_within`] gives any room.
+    travelled: bool,
 }
 
 /// |x − b| − r, or `stop` when that is at most `stop` (decided on squared distances, without
@@ -229,14 +270,18 @@ impl<'a> Field<'a> {
             nodes: d.nodes,
             certificates: d.certificates,
             anchored: true,
+            travelled: true,
         })
     }
 
-    /// The same field with anchored lookups on or off. Off, every lookup reads the field
-    /// (the previous behaviour, the benchmark's baseline); the values that decide a risk are
-    /// the same either way.
-    pub fn anchored(self, anchored: bool) -> Self {
-        Field { anchored, ..self }
+    /// The same field with other [`Lookups`] (the default is [`Lookups::Travelled`]); the
+    /// values that decide a risk are the same with each.
+    pub fn lookups(self, lookups: Lookups) -> Self {
+        Field {
+            anchored: lookups != Lookups::Full,
+            travelled: lookups == Lookups::Travelled,
+            ..self
+        }
     }
 
     /// Node spacing h, m.
@@ -491,6 +536,27 @@ impl DistanceField for Field<'_> {
             return hint.stop;
         }
         self.lookup_in(c, cell, p, stop, hint)
+    }
+
+    fn settles_by_travel(&self) -> bool {
+        self.travelled
+    }
+
+    /// The room the first anchored test leaves around `p`: the anchor's slack less the
+    /// distance from the anchor, and the distance to the faces of the box it tests.
+    fn settled_within(&self, p: &Vector3<f64>, stop: f64, hint: &Hint) -> f64 {
+        if !(self.travelled && hint.slack2 > 0.0 && hint.stop <= stop) {
+            return 0.0;
+        }
+        let x = p - hint.corner;
+        let mut room = crate::float::sqrt(hint.slack2) - crate::float::norm(&(p - hint.anchor));
+        // A NaN point makes every term NaN, and the room 0.
+        let lesser = |a: f64, b: f64| if a < b { a } else { b };
+        for a in 0..3 {
+            room = lesser(lesser(room, x[a]), self.span - x[a]);
+        }
+        let room = room - TRAVEL_MARGIN;
+        if room > 0.0 { room } else { 0.0 }
     }
 }
 

@@ -93,18 +93,45 @@ impl ArmKinematics {
     /// (`base · frame · centre`), written to `out` like [`ArmKinematics::sphere_centres`].
     /// Each frame is composed and turned into a matrix once, not once per sphere.
     pub fn sphere_centres_in(&self, model: &RobotModel, base: &Pose, out: &mut [Vector3<f64>]) {
-        let frames: [(Matrix3<f64>, Vector3<f64>); N_FRAMES] = core::array::from_fn(|l| {
-            let f = base * self.frames[l];
+        let mut frames = FramesIn::new(self, base);
+        for (s, o) in model.spheres.iter().zip(out.iter_mut()) {
+            if let Some(p) = frames.point(s.link as usize, &s.centre) {
+                *o = p;
+            }
+        }
+    }
+}
+
+/// The frames of one [`ArmKinematics`] where the arm base is at `base`, each composed
+/// (`base · frame`) and turned into a matrix once, on its first use.
+pub struct FramesIn<'a> {
+    kin: &'a ArmKinematics,
+    base: &'a Pose,
+    built: [Option<(Matrix3<f64>, Vector3<f64>)>; N_FRAMES],
+}
+
+impl<'a> FramesIn<'a> {
+    /// No frame composed yet.
+    pub fn new(kin: &'a ArmKinematics, base: &'a Pose) -> Self {
+        FramesIn {
+            kin,
+            base,
+            built: [None; N_FRAMES],
+        }
+    }
+
+    /// `base · frame · c` for frame `link`; `None` if there is no such frame.
+    #[inline]
+    pub fn point(&mut self, link: usize, c: &Vector3<f64>) -> Option<Vector3<f64>> {
+        let (kin, base) = (self.kin, self.base);
+        let (r, t) = self.built.get_mut(link)?.get_or_insert_with(|| {
+            let f = base * kin.frames[link];
             (
                 f.rotation.to_rotation_matrix().into_inner(),
                 f.translation.vector,
             )
         });
-        for (s, o) in model.spheres.iter().zip(out.iter_mut()) {
-            if let Some((r, t)) = frames.get(s.link as usize) {
-                *o = r * s.centre + t;
-            }
-        }
+        Some(*r * c + *t)
     }
 }
 
