@@ -79,10 +79,11 @@ pub fn all(dataset: &Path) -> anyhow::Result<Vec<(&'static str, String, Vec<u8>)
     // too slow a seed; the fuzzer grows sweeps from this one).
     let model = prf_files::robot::example()?;
     let ds = prf_files::dataset::Dataset::read(dataset, &model)?;
-    let learner = Learner::new(&ds, &model, &LearnConfig::default())?;
-    out.push(("kb", "empty.kb".into(), learner.save()));
+    let mut learner = Learner::new(&ds, &model, &LearnConfig::default())?;
+    let saved = learner.save()?;
+    out.push(("kb", "empty.kb".into(), saved.clone()));
     // The same with an (empty) addition after the base, so that mutations reach the additions.
-    let appended = [learner.save(), learner.addition(&[])].concat();
+    let appended = [saved, learner.addition(&[])].concat();
     out.push(("kb", "empty-addition.kb".into(), appended));
     for (kind, name, text) in [
         (0u8, "urdf.bin", EXAMPLE_URDF),

@@ -6,14 +6,14 @@ mod common;
 
 use common::TempDir;
 use prf_files::dataset::Dataset;
-use prf_learn::kb::KbError;
-use prf_learn::learn::{LearnError, Learner, learn_into, learn_lessons_into};
+use prf_learn::kb::{HEADER, KbError};
+use prf_learn::learn::{LearnError, Learner, fingerprint, learn_into, learn_lessons_into};
 use prf_learn::{LearnConfig, compile, learn};
 use prf_shared::robot::RobotModel;
 use prf_sim::demogen::generate_dataset;
 use prf_sim::world::World;
 use std::process::Command;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 /// Afforded tasks of the example cell: CNC, Printer and Table types, both parts.
 const SELECTION: [usize; 5] = [0, 8, 54, 13, 60];
@@ -44,22 +44,31 @@ fn a_saved_learner_adds_demonstrations_as_batch_learning_does() {
     let batch = compile(&learn(ds, &model, &cfg, &|_| {}).unwrap()).unwrap();
     let mut first = Learner::new(ds, &model, &cfg).unwrap();
     let k3 = learn_into(&mut first, &ds.demonstrations[..3], &|_| {}).unwrap();
-    let saved = first.save();
+    let saved = first.save().unwrap();
     let mut loaded = Learner::load(&saved).expect("load");
     assert!(
-        loaded.save() == saved,
+        loaded.save().unwrap() == saved,
         "save → load → save is the same file"
     );
     assert_eq!(
-        compile(&loaded.knowledge(&|_| {})).unwrap(),
+        compile(&loaded.knowledge(&|_| {}).unwrap()).unwrap(),
         compile(&k3).unwrap(),
         "the loaded learner knows what the saved one knew"
+    );
+    // Opened with its sweeps left in the file: the same file saved, the same blobs.
+    let mut opened = Learner::open(Arc::new(saved.clone())).expect("open");
+    assert!(opened.save().unwrap() == saved, "save → open → save");
+    let k5 = learn_into(&mut opened, &ds.demonstrations[3..], &|_| {}).unwrap();
+    assert!(
+        compile(&k5).unwrap() == batch,
+        "3 demonstrations saved, opened, then 2 added: the batch blob"
     );
     let k5 = learn_into(&mut loaded, &ds.demonstrations[3..], &|_| {}).unwrap();
     assert!(
         compile(&k5).unwrap() == batch,
         "3 demonstrations saved, loaded, then 2 added: the batch blob"
     );
+    assert!(opened.save().unwrap() == loaded.save().unwrap());
     assert_eq!(loaded.demonstrations(), 5);
     let ids: Vec<&str> = loaded.ids().iter().map(|(id, _)| id.as_str()).collect();
     let expected: Vec<&str> = ds.demonstrations.iter().map(|d| d.id.as_str()).collect();
@@ -77,39 +86,48 @@ fn appended_additions_load_as_the_learner_that_appended_them() {
     let batch = compile(&learn(ds, &model, &cfg, &|_| {}).unwrap()).unwrap();
     let mut first = Learner::new(ds, &model, &cfg).unwrap();
     learn_into(&mut first, &ds.demonstrations[..2], &|_| {}).unwrap();
-    let mut file = first.save();
+    let mut file = first.save().unwrap();
     let mut starts = Vec::new();
     for range in [2..3, 3..5] {
-        let mut writer = Learner::load(&file).expect("load");
+        // As `prf learn --add` does: the sweeps read only for the types rebuilt.
+        let mut writer = Learner::open(Arc::new(file.clone())).expect("open");
         let (k, lessons) =
             learn_lessons_into(&mut writer, &ds.demonstrations[range], &|_| {}).expect("learn");
         starts.push(file.len());
         file.extend(writer.addition(&lessons));
+        let written = writer.save().unwrap();
         let mut reader = Learner::load(&file).expect("load with additions");
         assert!(
-            reader.save() == writer.save(),
+            reader.save().unwrap() == written,
             "the learner loaded is the learner that appended"
         );
-        assert!(compile(&reader.knowledge(&|_| {})).unwrap() == compile(&k).unwrap());
+        assert!(compile(&reader.knowledge(&|_| {}).unwrap()).unwrap() == compile(&k).unwrap());
+        // Opened, the additions' rebuilds are kept until a sweep is read: saving reads them.
+        let mut opened = Learner::open(Arc::new(file.clone())).expect("open with additions");
+        assert!(
+            opened.save().unwrap() == written,
+            "the learner opened is the learner that appended"
+        );
     }
+    // The additions' rebuilds kept until the next build reads the sweeps.
+    let mut all = Learner::open(Arc::new(file.clone())).unwrap();
+    assert!(
+        compile(&all.knowledge(&|_| {}).unwrap()).unwrap() == batch,
+        "2 learned, then 1 and 2 appended: the batch blob"
+    );
     let mut all = Learner::load(&file).unwrap();
     assert!(
-        compile(&all.knowledge(&|_| {})).unwrap() == batch,
+        compile(&all.knowledge(&|_| {}).unwrap()).unwrap() == batch,
         "2 learned, then 1 and 2 appended: the batch blob"
     );
     assert_eq!(all.demonstrations(), 5);
 
-    // Additions go after a version-3 base only, and while they stay within half of it.
+    // Additions go after the base while they stay within half of it.
     use prf_learn::kb::rewrite_instead;
-    let base = first.save();
+    let base = first.save().unwrap();
     assert_eq!(rewrite_instead(&base, base.len() / 2), None);
     let over = rewrite_instead(&base, base.len() / 2 + 1).unwrap_or_default();
     assert!(over.contains("over half"), "{over}");
-    let mut v2 = base.clone();
-    v2[6] = 2;
-    assert!(Learner::load(&v2).is_ok(), "a version-2 file is read");
-    let why = rewrite_instead(&v2, 1).unwrap_or_default();
-    assert!(why.contains("version-2 layout takes no additions"), "{why}");
 
     let load = |b: &[u8]| Learner::load(b).map(|_| ()).unwrap_err();
     let e = load(&file[..file.len() - 1]);
@@ -132,6 +150,94 @@ fn appended_additions_load_as_the_learner_that_appended_them() {
         matches!(&e, KbError::Addition { n: 2, at, .. } if *at == starts[1]),
         "{e}"
     );
+}
+
+/// The byte ranges of the base's sweep sections (header included), read from the layout
+/// `docs/formats.md` states: the core's length at bytes 18..26, then per location type a
+/// section's payload length (u64 LE) and CRC-32 before its payload.
+fn sections(file: &[u8], types: usize) -> Vec<std::ops::Range<usize>> {
+    let u64_at = |i: usize| u64::from_le_bytes(file[i..i + 8].try_into().unwrap()) as usize;
+    let mut at = HEADER + u64_at(18);
+    (0..types)
+        .map(|_| {
+            let range = at..at + 12 + u64_at(at);
+            at = range.end;
+            range
+        })
+        .collect()
+}
+
+/// `Learner::open` reads a location type's sweep only when a build needs it: a corrupt sweep
+/// section refuses `Learner::load` and, opened, only the programs that grow that type, naming
+/// it; other programs learn the blob the intact file learns, and the corrupt section is saved
+/// as it was, not mended or dropped.
+#[test]
+fn a_sweep_is_read_only_when_its_type_is_rebuilt() {
+    let ds = dataset();
+    let model = RobotModel::kmr_iiwa14();
+    let mut l = Learner::new(ds, &model, &LearnConfig::default()).unwrap();
+    learn_into(&mut l, &ds.demonstrations[..2], &|_| {}).unwrap();
+    let file = l.save().unwrap();
+    let names = prf_learn::learn::location_kinds(ds);
+    let swept: Vec<Vec<usize>> = ds.demonstrations[2..]
+        .iter()
+        .map(|d| l.lessons(d).unwrap().swept_types())
+        .collect();
+    let (mut refused, mut learned) = (0, 0);
+    for (t, range) in sections(&file, names.len()).into_iter().enumerate() {
+        let mut corrupt = file.clone();
+        corrupt[(range.start + 12 + range.end) / 2] ^= 0x08;
+        let e = Learner::load(&corrupt).map(|_| ()).unwrap_err();
+        assert!(
+            matches!(&e, KbError::Sweep { location_type, at, .. } if *location_type == names[t] && *at == range.start),
+            "{e}"
+        );
+        assert!(e.to_string().contains("is corrupt: CRC-32"), "{e}");
+        for (i, types) in swept.iter().enumerate() {
+            let d = &ds.demonstrations[2 + i..3 + i];
+            let mut opened = Learner::open(Arc::new(corrupt.clone())).expect("opened");
+            let k = learn_into(&mut opened, d, &|_| {});
+            if types.contains(&t) {
+                let e = k.map(|_| ()).unwrap_err();
+                assert!(
+                    matches!(&e, LearnError::Kb(KbError::Sweep { location_type, .. }) if *location_type == names[t]),
+                    "{e}"
+                );
+                refused += 1;
+                continue;
+            }
+            let mut intact = Learner::load(&file).unwrap();
+            let expected = compile(&learn_into(&mut intact, d, &|_| {}).unwrap()).unwrap();
+            assert!(compile(&k.unwrap()).unwrap() == expected, "{}", d[0].id);
+            let saved = opened.save().unwrap();
+            let e = Learner::load(&saved).map(|_| ()).unwrap_err();
+            assert!(
+                matches!(&e, KbError::Sweep { location_type, .. } if *location_type == names[t]),
+                "{e}"
+            );
+            assert_eq!(saved.len(), intact.save().unwrap().len());
+            learned += 1;
+        }
+    }
+    assert!(
+        refused >= names.len() && learned > 0,
+        "{refused} refused, {learned} learned"
+    );
+}
+
+/// A program's fingerprint is the blob's CRC-32 (`prf_shared::blob::crc32`, table-driven) of
+/// every sample's t, gripper, base and arm values in little-endian f64, in order.
+#[test]
+fn a_fingerprint_is_the_crc_of_the_trajectory() {
+    for d in &dataset().demonstrations {
+        let bytes: Vec<u8> = d
+            .samples
+            .iter()
+            .flat_map(|s| [s.t, s.gripper].into_iter().chain(s.base).chain(s.arm))
+            .flat_map(f64::to_le_bytes)
+            .collect();
+        assert_eq!(fingerprint(d), prf_shared::blob::crc32(&bytes), "{}", d.id);
+    }
 }
 
 #[test]
@@ -166,8 +272,10 @@ fn unfit_datasets_and_bad_files_are_refused_with_a_reason() {
     // overflowed the grid size) are refused when the file is read.
     let mut huge = part(ds, 0..1);
     huge.clearance_demo = Some(1e300);
-    let wide = Learner::new(&huge, &model, &LearnConfig::default()).unwrap();
-    let e = Learner::load(&wide.save()).map(|_| ()).unwrap_err();
+    let mut wide = Learner::new(&huge, &model, &LearnConfig::default()).unwrap();
+    let e = Learner::load(&wide.save().unwrap())
+        .map(|_| ())
+        .unwrap_err();
     assert_eq!(
         e,
         KbError::Decode("a workspace setting out of range".into())
@@ -179,32 +287,38 @@ fn unfit_datasets_and_bad_files_are_refused_with_a_reason() {
     giant.spheres[0].radius = 1e300;
     let mut queued = Learner::new(ds, &giant, &LearnConfig::default()).unwrap();
     queued.add(&queued.lessons(&ds.demonstrations[0]).unwrap());
-    let e = Learner::load(&queued.save()).map(|_| ()).unwrap_err();
+    let e = Learner::load(&queued.save().unwrap())
+        .map(|_| ())
+        .unwrap_err();
     assert_eq!(
         e,
         KbError::Decode("a robot sphere's radius out of range".into())
     );
 
-    let good = l.save();
+    let good = l.save().unwrap();
     let load = |b: &[u8]| Learner::load(b).map(|_| ()).unwrap_err();
     assert_eq!(load(b"not a knowledge base at all"), KbError::Magic);
-    let mut v = good.clone();
-    v[6] = 9;
-    assert_eq!(load(&v), KbError::Version { found: 9 });
+    for found in [3, 9] {
+        let mut v = good.clone();
+        v[6] = found as u8;
+        let e = load(&v);
+        assert_eq!(e, KbError::Version { found });
+        assert!(e.to_string().contains("learn it again"), "{e}");
+    }
     assert!(matches!(
         load(&good[..good.len() - 1]),
         KbError::Truncated { .. }
     ));
     let mut flipped = good.clone();
-    let mid = good.len() / 2;
-    flipped[mid] ^= 0x20;
+    flipped[HEADER + 3] ^= 0x20;
     assert!(matches!(load(&flipped), KbError::Crc { .. }));
-    // A payload with a valid checksum that is not a learner.
+    // A core with a valid checksum that is not a learner.
     let junk = vec![0xffu8; 64];
-    let mut forged = good[..22].to_vec();
+    let mut forged = good[..HEADER].to_vec();
     forged[10..18].copy_from_slice(&(junk.len() as u64).to_le_bytes());
+    forged[18..26].copy_from_slice(&(junk.len() as u64).to_le_bytes());
     let crc = prf_shared::blob::crc32(&junk);
-    forged[18..22].copy_from_slice(&crc.to_le_bytes());
+    forged[26..30].copy_from_slice(&crc.to_le_bytes());
     forged.extend_from_slice(&junk);
     assert!(matches!(load(&forged), KbError::Decode(_)));
 }

@@ -6,17 +6,21 @@ use crate::skills::{self, ArmSkill, Skill};
 use crate::workspace::{self, LearnedField, PathSphere, Sweep, SweptPath, WorkspaceConfig};
 use prf_files::dataset::{Dataset, Demonstration, Placed};
 use prf_files::{OnProgress, Progress};
-use prf_shared::JointVector;
 use prf_shared::dmp::DmpParams;
 use prf_shared::kinematics::{ArmKinematics, arm_base_pose, platform_pose};
 use prf_shared::motion::{CLASSES, Frame, Instance, MotionClass, TaskLocation};
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::{Pose, pose_from_array};
+use prf_shared::{JointVector, NA};
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
 
 mod journal;
+mod stored;
+
+pub use stored::KbFile;
+use stored::Slot;
 
 /// Settings of Learn.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -112,6 +116,21 @@ pub struct Lessons {
     lessons: Vec<Lesson>,
 }
 
+impl Lessons {
+    /// The location types whose workspaces these lessons grow (their swept spheres), ascending.
+    pub fn swept_types(&self) -> Vec<usize> {
+        let mut types: Vec<usize> = self
+            .lessons
+            .iter()
+            .filter(|l| l.sweep.is_some())
+            .filter_map(|l| l.location_type)
+            .collect();
+        types.sort_unstable();
+        types.dedup();
+        types
+    }
+}
+
 fn location_of(d: &Demonstration, l: TaskLocation) -> &Placed {
     match l {
         TaskLocation::From => &d.task.from,
@@ -168,6 +187,8 @@ pub enum LearnError {
         class: &'static str,
         error: prf_shared::rdmp::RdmpError,
     },
+    #[error(transparent)]
+    Kb(#[from] crate::kb::KbError),
 }
 
 /// Pose of frame `f` at sample `at` of an instance.
@@ -397,7 +418,7 @@ pub fn learn_lessons_into(
         if let Progress::Done(n) = p {
             progress(Progress::Done(n))
         }
-    });
+    })?;
     knowledge.timings = vec![
         ("segment + train skills", t_segment),
         ("workspaces", t1.elapsed().as_secs_f64()),
@@ -420,7 +441,8 @@ pub struct Learner {
     part_kinds: Vec<String>,
     location_types: Vec<LocationTypeKnowledge>,
     part_types: Vec<PartTypeKnowledge>,
-    sweeps: Vec<Sweep>,
+    /// Per location type, its sweep (left in the file by [`Learner::open`] until needed).
+    sweeps: Vec<Slot>,
     /// Per location type, the spheres added since the last field build, in order.
     pending: Vec<Vec<Arc<SweptPath>>>,
     arms: Vec<ArmSkill>,
@@ -467,7 +489,10 @@ impl Learner {
                     grasps: AffordanceSet::default(),
                 })
                 .collect(),
-            sweeps: vec![Sweep::new(config.workspace.feature_spacing); location_kinds.len()],
+            sweeps: vec![
+                Slot::Ready(Sweep::new(config.workspace.feature_spacing));
+                location_kinds.len()
+            ],
             pending: vec![Vec::new(); location_kinds.len()],
             location_kinds,
             part_kinds,
@@ -609,15 +634,33 @@ impl Learner {
         Ok(())
     }
 
-    /// The learner's whole state as a knowledge-base file ([`crate::kb`]).
-    pub fn save(&self) -> Vec<u8> {
+    /// The learner's whole state as a knowledge-base file ([`crate::kb`]). A sweep still in
+    /// the file it was opened on is read first if additions changed it, and is otherwise
+    /// saved as the bytes read.
+    pub fn save(&mut self) -> Result<Vec<u8>, crate::kb::KbError> {
         use crate::kb::*;
+        for t in 0..self.sweeps.len() {
+            if self.sweeps[t].ready().is_none() && self.sweeps[t].unchanged().is_none() {
+                self.read_sweep(t)?;
+            }
+        }
+        let written: Vec<Option<Vec<u8>>> = self
+            .sweeps
+            .iter()
+            .map(|s| s.ready().map(|s| section(&s.to_state())))
+            .collect();
+        let sections: Vec<&[u8]> = self
+            .sweeps
+            .iter()
+            .zip(&written)
+            .map(|(s, w)| w.as_deref().or(s.unchanged()).unwrap_or_default())
+            .collect();
         let affordances = |a: &AffordanceSet| AffordanceState {
             poses: a.poses.iter().map(pose_state).collect(),
             counts: a.counts.clone(),
         };
         let v = |c: &nalgebra::Vector3<f64>| [c.x, c.y, c.z];
-        encode(&LearnerState {
+        let state = LearnerState {
             robot: RobotState::of(&self.robot),
             description: self.description.clone(),
             config: self.config,
@@ -634,7 +677,6 @@ impl Learner {
                 .iter()
                 .map(|p| affordances(&p.grasps))
                 .collect(),
-            sweeps: self.sweeps.iter().map(Sweep::to_state).collect(),
             pending: self
                 .pending
                 .iter()
@@ -677,22 +719,37 @@ impl Learner {
                 .collect(),
             demonstrations: self.demonstrations,
             ids: self.ids.clone(),
-        })
+        };
+        Ok(encode(&state, &sections))
     }
 
-    /// The learner a knowledge-base file holds: the base [`Learner::save`] wrote, then each
-    /// addition after it ([`Learner::addition`]) replayed.
+    /// The learner a knowledge-base file holds, every part of it read and checked: the base
+    /// [`Learner::save`] wrote, then each addition after it ([`Learner::addition`]) replayed.
     pub fn load(bytes: &[u8]) -> Result<Self, crate::kb::KbError> {
-        let (st, additions) = crate::kb::decode(bytes)?;
-        let mut learner = Self::from_state(st)?;
-        for a in additions {
+        Self::read(bytes, None)
+    }
+
+    /// The learner of the file `bytes`; with `file` (the same bytes) its sweeps are left in
+    /// it ([`Learner::open`]), without them read here.
+    fn read(bytes: &[u8], file: Option<&KbFile>) -> Result<Self, crate::kb::KbError> {
+        let decoded = crate::kb::decode(bytes)?;
+        let mut learner = Self::from_state(decoded.base)?;
+        for (t, range) in decoded.sweeps.into_iter().enumerate() {
+            learner.sweeps[t] = match file {
+                Some(f) => Slot::stored(f.clone(), range),
+                None => Slot::Ready(learner.sweep_of(t, &bytes[range.clone()], range.start)?),
+            };
+        }
+        for a in decoded.additions {
             learner.replay(a)?;
         }
-        learner.check_grids()?;
+        for t in 0..learner.sweeps.len() {
+            learner.check_grid(t)?;
+        }
         Ok(learner)
     }
 
-    /// The learner of a knowledge base's base.
+    /// The learner of a knowledge base's core, its sweeps empty.
     fn from_state(st: crate::kb::LearnerState) -> Result<Self, crate::kb::KbError> {
         use crate::kb::*;
         let class = |name: &str| {
@@ -713,12 +770,10 @@ impl Learner {
             })
         };
         let types = st.location_kinds.len();
-        if st.location_types.len() != types || st.sweeps.len() != types || st.pending.len() != types
-        {
+        if st.location_types.len() != types || st.pending.len() != types {
             return Err(KbError::Decode(format!(
-                "{types} location types, but {} type records, {} sweeps, {} queues",
+                "{types} location types, but {} type records, {} queues",
                 st.location_types.len(),
-                st.sweeps.len(),
                 st.pending.len()
             )));
         }
@@ -786,7 +841,7 @@ impl Learner {
         let v = |c: [f64; 3]| nalgebra::Vector3::new(c[0], c[1], c[2]);
 
         let robot = st.robot.model()?;
-        let sweeps: Vec<Sweep> = st.sweeps.into_iter().map(Sweep::from_state).collect();
+        let sweeps = vec![Slot::Ready(Sweep::new(st.config.workspace.feature_spacing)); types];
         Ok(Learner {
             robot,
             description: st.description,
@@ -823,23 +878,18 @@ impl Learner {
         })
     }
 
-    /// Refuses a learner whose next field build would allocate a grid over
-    /// [`MAX_GRID_NODES`]: per location type its feature balls and its queued spheres.
-    fn check_grids(&self) -> Result<(), crate::kb::KbError> {
-        let nodes = self
-            .sweeps
+    /// Refuses a learner whose next field build of location type `t` would allocate a grid
+    /// over [`MAX_GRID_NODES`]: its feature balls and its queued spheres (a sweep still in the
+    /// file is checked when read).
+    fn check_grid(&self, t: usize) -> Result<(), crate::kb::KbError> {
+        let (Some(sweep), Some(queued)) = (self.sweeps[t].ready(), self.pending.get(t)) else {
+            return Ok(());
+        };
+        let more = queued
             .iter()
-            .zip(&self.pending)
-            .map(|(s, queued)| {
-                let more: Vec<_> = queued
-                    .iter()
-                    .flat_map(|p| &p.spheres)
-                    .map(|p| (p.centre, self.robot.spheres[p.sphere as usize].radius))
-                    .collect();
-                s.grid_nodes(&more, &self.config.workspace)
-            })
-            .max()
-            .unwrap_or(0);
+            .flat_map(|p| &p.spheres)
+            .map(|p| (p.centre, self.robot.spheres[p.sphere as usize].radius));
+        let nodes = sweep.grid_nodes(more, &self.config.workspace);
         if nodes > MAX_GRID_NODES {
             return Err(crate::kb::KbError::Decode(format!(
                 "a workspace grid of {nodes} nodes (at most {MAX_GRID_NODES})"
@@ -850,8 +900,14 @@ impl Learner {
 
     /// What was learned so far (Alg. 3's output, line 20's share() included): the fields of
     /// the location types touched since the last call are rebuilt (in parallel; `progress`
-    /// is told of each), the others kept.
-    pub fn knowledge(&mut self, progress: OnProgress<'_>) -> Knowledge {
+    /// is told of each), the others kept. A touched type's sweep still in the file is read
+    /// first, and may be refused ([`Learner::open`]).
+    pub fn knowledge(&mut self, progress: OnProgress<'_>) -> Result<Knowledge, crate::kb::KbError> {
+        for t in 0..self.sweeps.len() {
+            if !self.pending[t].is_empty() {
+                self.read_sweep(t)?;
+            }
+        }
         let (wc, robot) = (self.config.workspace, &self.robot);
         // Per touched type, in parallel: its new spheres in order, then the field.
         let rebuilt: Vec<(usize, Option<LearnedField>)> = self
@@ -861,13 +917,13 @@ impl Learner {
             .zip(self.location_types.par_iter())
             .enumerate()
             .filter(|(_, ((_, pending), _))| !pending.is_empty())
-            .map(|(t, ((sweep, pending), known))| {
-                // The decisions of the last build, before its sweep grows.
-                if let Some(f) = &known.field {
-                    sweep.recover_certified(f, &wc);
-                }
+            .filter_map(|(t, ((slot, pending), known))| {
+                Some((t, slot.ready_mut()?, pending, known))
+            })
+            .map(|(t, sweep, pending, known)| {
+                // The decisions of the last build recovered before its sweep grows.
                 let paths: Vec<&SweptPath> = pending.iter().map(|p| p.as_ref()).collect();
-                sweep.add_spheres(robot, &paths);
+                sweep.grow(robot, &paths, known.field.as_ref(), &wc);
                 pending.clear();
                 let f = workspace::build_field(sweep, &wc);
                 progress(Progress::Done(1));
@@ -880,7 +936,7 @@ impl Learner {
         let mut skill_set = self.skills.clone();
         // Line 20: K ← share(K).
         skills::share(&mut skill_set);
-        Knowledge {
+        Ok(Knowledge {
             robot: self.robot.clone(),
             description: self.description.clone(),
             config: self.config,
@@ -892,7 +948,7 @@ impl Learner {
             instances: self.instances.clone(),
             demonstrations: self.demonstrations,
             timings: Vec::new(),
-        }
+        })
     }
 }
 
@@ -901,9 +957,9 @@ impl Learner {
 const MAX_GRID_NODES: usize = 16 << 20;
 
 /// The numbers of a knowledge base that size what learning allocates or index what it
-/// reads: settings in range (lengths within [0, 1] m, the voxel within [1 mm, 1 m]), swept
-/// spheres finite within 100 m, their and the robot's radii in (0, 1] m, sphere indices of
-/// the robot.
+/// reads: settings in range (lengths within [0, 1] m, the voxel within [1 mm, 1 m]), queued
+/// spheres finite within 100 m, the robot's radii in (0, 1] m, sphere indices of the robot
+/// (the sweeps: [`check_sweep`]).
 fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
     let bad = |what: &str| Err(crate::kb::KbError::Decode(format!("{what} out of range")));
     let w = &st.config.workspace;
@@ -919,16 +975,6 @@ fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
         return bad("a workspace setting");
     }
     let point = within_100_m;
-    let ball = |(c, r): &([f64; 3], f64)| point(c) && *r > 0.0 && *r <= 1.0;
-    for s in &st.sweeps {
-        let sample = |x: &workspace::SphereSample| ball(&(x.centre.into(), x.radius));
-        if !s.spheres.iter().all(sample) || !s.features.iter().all(ball) {
-            return bad("a swept sphere");
-        }
-        if s.feature_spacing != w.feature_spacing {
-            return bad("a sweep's feature spacing");
-        }
-    }
     if !st.robot.radii().all(|r| r > 0.0 && r <= 1.0) {
         return bad("a robot sphere's radius");
     }
@@ -936,6 +982,24 @@ fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
     let swept = |(c, i): &([f64; 3], u8)| point(c) && (*i as usize) < spheres;
     if !st.pending.iter().flatten().flatten().all(swept) {
         return bad("a queued sphere");
+    }
+    Ok(())
+}
+
+/// Why a location type's sweep in a knowledge base is refused, if it is: a swept sphere or
+/// feature ball not finite within 100 m or with a radius outside (0, 1] m, or a feature
+/// spacing other than the settings'.
+fn check_sweep(s: &crate::kb::SweepState, w: &WorkspaceConfig) -> Result<(), String> {
+    let ball = |(c, r): &([f64; 3], f64)| within_100_m(c) && *r > 0.0 && *r <= 1.0;
+    let sample = |x: &workspace::SphereSample| ball(&(x.centre.into(), x.radius));
+    if !s.spheres.iter().all(sample) || !s.features.iter().all(ball) {
+        return Err("holds a swept sphere out of range".into());
+    }
+    if s.feature_spacing != w.feature_spacing {
+        return Err(format!(
+            "has feature spacing {} m, the settings' is {} m",
+            s.feature_spacing, w.feature_spacing
+        ));
     }
     Ok(())
 }
@@ -948,11 +1012,15 @@ fn within_100_m(c: &[f64; 3]) -> bool {
 /// CRC-32 of a demonstration's trajectory (every sample's bits): the same program has the
 /// same fingerprint whatever its id.
 pub fn fingerprint(d: &Demonstration) -> u32 {
-    let mut digest = prf_shared::blob::CRC32.digest();
+    // The blob's CRC-32 by carry-less multiplication ([`crate::kb`]), a sample at a time.
+    let mut digest = crc32fast::Hasher::new();
+    let mut bytes = [0u8; 8 * (2 + 3 + NA)];
     for s in &d.samples {
-        for v in [s.t, s.gripper].iter().chain(&s.base).chain(&s.arm) {
-            digest.update(&v.to_le_bytes());
+        let values = [s.t, s.gripper].into_iter().chain(s.base).chain(s.arm);
+        for (b, v) in bytes.chunks_exact_mut(8).zip(values) {
+            b.copy_from_slice(&v.to_le_bytes());
         }
+        digest.update(&bytes);
     }
     digest.finalize()
 }

@@ -187,13 +187,27 @@ impl Sweep {
         }
     }
 
-    /// Recovers the certificate decisions of the build that gave `field` from these spheres,
-    /// when the sweep has none (it was loaded: a knowledge base does not keep them), so that
-    /// the next build decides only what changed ([`Certified::recover`]).
-    pub(crate) fn recover_certified(&mut self, field: &LearnedField, cfg: &WorkspaceConfig) {
-        if self.certified.is_none() {
-            self.certified = Certified::recover(field, &self.spheres, cfg);
+    /// Adds the spheres of `paths` ([`Sweep::add_spheres`]) after recovering the certificate
+    /// decisions of the build that gave `field` from the spheres before them, when the sweep
+    /// has none (it was read from a knowledge base, which does not keep them), so that the
+    /// next build decides only what changed ([`Certified::recover`]). The recovery and the
+    /// search for new spheres read the sweep at once, on two threads.
+    pub(crate) fn grow(
+        &mut self,
+        model: &RobotModel,
+        paths: &[&SweptPath],
+        field: Option<&LearnedField>,
+        cfg: &WorkspaceConfig,
+    ) {
+        let recover = field.filter(|_| self.certified.is_none());
+        let (certified, fresh) = rayon::join(
+            || recover.and_then(|f| Certified::recover(f, &self.spheres, cfg)),
+            || self.fresh(model, paths),
+        );
+        if recover.is_some() {
+            self.certified = certified;
         }
+        self.add_fresh(fresh);
     }
 
     /// The last field build's splat as plain data.
@@ -235,17 +249,16 @@ impl Sweep {
 
     /// Nodes of the grid a field build of this sweep would allocate with `cfg`, once the
     /// spheres `more` (centre, radius) are added too.
-    pub(crate) fn grid_nodes(&self, more: &[(Vector3<f64>, f64)], cfg: &WorkspaceConfig) -> usize {
-        let balls: Vec<(Vector3<f64>, f64)> = self
-            .features
-            .iter()
-            .chain(more)
-            .map(|(c, r)| (*c, r + cfg.epsilon))
-            .collect();
-        if balls.is_empty() {
+    pub(crate) fn grid_nodes(
+        &self,
+        more: impl Iterator<Item = (Vector3<f64>, f64)>,
+        cfg: &WorkspaceConfig,
+    ) -> usize {
+        let balls = self.features.iter().copied().chain(more);
+        let Some((lo, hi)) = bounds(balls.map(|(c, r)| (c, r + cfg.epsilon))) else {
             return 0;
-        }
-        let (_, dims) = grid(&balls, cfg);
+        };
+        let (_, dims) = grid_of(lo, hi, cfg);
         dims.iter().fold(1usize, |n, d| n.saturating_mul(*d))
     }
 
@@ -284,6 +297,12 @@ impl Sweep {
     /// sorted ([`SweptPath`]): they are merged with each other and with the kept ones in
     /// sequential passes, instead of a hash lookup per sphere (a cache miss each, 0.2 µs).
     pub fn add_spheres(&mut self, model: &RobotModel, paths: &[&SweptPath]) {
+        let fresh = self.fresh(model, paths);
+        self.add_fresh(fresh);
+    }
+
+    /// The spheres [`Sweep::add_spheres`] adds, in order, and their keys, sorted.
+    fn fresh(&self, model: &RobotModel, paths: &[&SweptPath]) -> Fresh {
         // Every path's first sphere per key, indexed across `paths`; the stable sort merges
         // the sorted runs and keeps equal keys in path order, so the first is the earliest.
         let mut fresh: Vec<(SeenKey, u32)> = Vec::new();
@@ -301,25 +320,44 @@ impl Sweep {
             seen.peek() != Some(&k)
         });
         let keys: Vec<SeenKey> = fresh.iter().map(|e| e.0).collect();
-        insert_sorted(&mut self.seen, &keys);
         // Re-visited configurations (the reversal, repeated programs) add nothing new.
         fresh.sort_unstable_by_key(|e| e.1);
         let mut p = 0;
+        let mut spheres = Vec::with_capacity(fresh.len());
         for &(_, i) in &fresh {
             while starts.get(p + 1).is_some_and(|s| *s <= i) {
                 p += 1;
             }
             let s = &paths[p].spheres[(i - starts[p]) as usize];
-            let (c, radius) = (s.centre, model.spheres[s.sphere as usize].radius);
-            self.spheres.push(SphereSample { centre: c, radius });
+            let radius = model.spheres[s.sphere as usize].radius;
+            spheres.push(SphereSample {
+                centre: s.centre,
+                radius,
+            });
+        }
+        Fresh { keys, spheres }
+    }
+
+    /// Adds what [`Sweep::fresh`] found: the keys, the spheres, and the feature balls they
+    /// thin to.
+    fn add_fresh(&mut self, fresh: Fresh) {
+        insert_sorted(&mut self.seen, &fresh.keys);
+        for s in &fresh.spheres {
             if self
                 .kept
-                .insert(feature_key(&c, radius, self.feature_spacing))
+                .insert(feature_key(&s.centre, s.radius, self.feature_spacing))
             {
-                self.features.push((c, radius));
+                self.features.push((s.centre, s.radius));
             }
         }
+        self.spheres.extend(fresh.spheres);
     }
+}
+
+/// New swept spheres of a sweep, in order, and their keys, sorted ([`Sweep::fresh`]).
+struct Fresh {
+    keys: Vec<SeenKey>,
+    spheres: Vec<SphereSample>,
 }
 
 /// The swept spheres of one instance (from [`Sweep::path_spheres`]) and, sorted, each of
@@ -426,12 +464,30 @@ impl LearnedField {
 /// growing sweep keeps its grid (and its splatted features) until it crosses a multiple.
 /// Returns the first node's position and the node counts (whole bricks).
 fn grid(balls: &[(Vector3<f64>, f64)], cfg: &WorkspaceConfig) -> (Vector3<f64>, [usize; 3]) {
+    let (lo, hi) = bounds(balls.iter().copied())
+        .unwrap_or((Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN)));
+    grid_of(lo, hi, cfg)
+}
+
+/// The box of the balls (centre, radius), or None when there are none.
+fn bounds(
+    balls: impl Iterator<Item = (Vector3<f64>, f64)>,
+) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    balls.fold(None, |b, (c, r)| {
+        let (lo, hi) = (c - Vector3::repeat(r), c + Vector3::repeat(r));
+        Some(b.map_or((lo, hi), |(l, h): (Vector3<f64>, Vector3<f64>)| {
+            (l.inf(&lo), h.sup(&hi))
+        }))
+    })
+}
+
+/// [`grid`] of the balls' box `lo`..`hi`.
+fn grid_of(
+    lo: Vector3<f64>,
+    hi: Vector3<f64>,
+    cfg: &WorkspaceConfig,
+) -> (Vector3<f64>, [usize; 3]) {
     let h = cfg.voxel as f32 as f64;
-    let (mut lo, mut hi) = (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN));
-    for (c, r) in balls {
-        lo = lo.inf(&(c - Vector3::repeat(*r)));
-        hi = hi.sup(&(c + Vector3::repeat(*r)));
-    }
     let margin = cfg.far + h;
     let step = ANCHOR as f64 * h;
     let first = (lo - Vector3::repeat(margin)).map(|v| (v / step).floor());

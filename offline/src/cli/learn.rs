@@ -4,9 +4,12 @@ use crate::cli::progress::Bar;
 use anyhow::Context;
 use prf_files::dataset::Dataset;
 use prf_files::robot;
-use prf_learn::learn::{Learner, fingerprint, learn_into, learn_lessons_into, skills_per_class};
+use prf_learn::learn::{
+    KbFile, Learner, fingerprint, learn_into, learn_lessons_into, skills_per_class,
+};
 use prf_learn::{LearnConfig, compile, report};
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
@@ -96,7 +99,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     prf_files::atomic::write(&a.output, &bytes)
         .with_context(|| format!("writing {}", a.output.display()))?;
     if let Some(kb) = &a.kb {
-        prf_files::atomic::write(kb, learner.save())
+        prf_files::atomic::write(kb, learner.save()?)
             .with_context(|| format!("writing {}", kb.display()))?;
     }
     if a.quiet {
@@ -140,8 +143,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 /// the blob compiled and written whole or not at all, the addition appended ([`write_kb`]).
 fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let bytes = map(kb).with_context(|| format!("reading {}", kb.display()))?;
-    let mut learner = Learner::load(&bytes).with_context(|| format!("reading {}", kb.display()))?;
+    let file: KbFile = Arc::new(map(kb).with_context(|| format!("reading {}", kb.display()))?);
+    let bytes = (*file).as_ref();
+    // The sweeps stay in the file until a rebuild reads them: only the touched types' are.
+    let mut learner =
+        Learner::open(file.clone()).with_context(|| format!("reading {}", kb.display()))?;
     let t_load = t0.elapsed().as_secs_f64();
     let before = learner.demonstrations();
     let mut demos = Vec::new();
@@ -163,7 +169,8 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
         }
     }
     let t1 = Instant::now();
-    let (k, lessons) = learn_lessons_into(&mut learner, &demos, &|_| {})?;
+    let (k, lessons) = learn_lessons_into(&mut learner, &demos, &|_| {})
+        .with_context(|| format!("learning into {}", kb.display()))?;
     let t_learn = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
     let blob = compile(&k)?;
@@ -171,7 +178,7 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
     let t3 = Instant::now();
     prf_files::atomic::write(&a.output, &blob)
         .with_context(|| format!("writing {}", a.output.display()))?;
-    let kb_write = write_kb(kb, &bytes, &learner, &lessons)
+    let kb_write = write_kb(kb, bytes, &mut learner, &lessons)
         .with_context(|| format!("writing {}", kb.display()))?;
     let t_write = t3.elapsed().as_secs_f64();
     if !a.quiet {
@@ -221,13 +228,13 @@ fn map(path: &std::path::Path) -> std::io::Result<memmap2::Mmap> {
 fn write_kb(
     kb: &std::path::Path,
     read: &[u8],
-    learner: &Learner,
+    learner: &mut Learner,
     lessons: &[prf_learn::learn::Lessons],
-) -> std::io::Result<String> {
+) -> anyhow::Result<String> {
     let record = learner.addition(lessons);
     let mb = |n: usize| n as f64 / 1e6;
     if let Some(why) = prf_learn::kb::rewrite_instead(read, record.len()) {
-        let whole = learner.save();
+        let whole = learner.save()?;
         prf_files::atomic::write(kb, &whole)?;
         return Ok(format!(
             "rewritten whole ({:.1} MB): {why}",

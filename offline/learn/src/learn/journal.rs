@@ -7,9 +7,8 @@ use crate::kb::{
     AdditionState, ArmState, FRAMES, KbError, LessonState, LessonsState, PathSpheres, RdmpState,
     encode_addition, pose_of, pose_state,
 };
-use crate::workspace::{PathSphere, SweptPath};
+use crate::workspace::PathSphere;
 use prf_shared::motion::CLASSES;
-use std::sync::Arc;
 
 impl Learner {
     /// The addition record of `lessons`, each already [`Learner::add`]ed, to append to the
@@ -18,12 +17,7 @@ impl Learner {
     /// emptied, the field and splat of that build; a type still queued is rebuilt after
     /// loading, as it would be here.
     pub fn addition(&self, lessons: &[Lessons]) -> Vec<u8> {
-        let mut touched: Vec<usize> = lessons
-            .iter()
-            .flat_map(|l| &l.lessons)
-            .filter(|l| l.sweep.is_some())
-            .filter_map(|l| l.location_type)
-            .collect();
+        let mut touched: Vec<usize> = lessons.iter().flat_map(Lessons::swept_types).collect();
         touched.sort_unstable();
         touched.dedup();
         encode_addition(&AdditionState {
@@ -33,7 +27,9 @@ impl Learner {
                 .filter(|&t| self.pending[t].is_empty())
                 .map(|t| {
                     let field = self.location_types[t].field.clone();
-                    (t, field, self.sweeps[t].splat_state())
+                    // A sweep left in the file has not been rebuilt since: no splat (a cache).
+                    let splat = self.sweeps[t].ready().and_then(|s| s.splat_state());
+                    (t, field, splat)
                 })
                 .collect(),
         })
@@ -53,10 +49,8 @@ impl Learner {
                     self.sweeps.len()
                 )));
             }
-            let paths: Vec<&SweptPath> = self.pending[t].iter().map(|p| p.as_ref()).collect();
-            self.sweeps[t].add_spheres(&self.robot, &paths);
-            self.pending[t].clear();
-            self.sweeps[t].set_splat(splat);
+            let paths = std::mem::take(&mut self.pending[t]);
+            self.sweeps[t].replay(&self.robot, &paths, splat);
             self.location_types[t].field = field;
         }
         Ok(())
@@ -94,21 +88,16 @@ impl Learner {
             };
             let n_spheres = self.robot.spheres.len();
             let sweep = match &l.sweep {
-                Some(PathSpheres(s)) => {
-                    if !s
+                Some(PathSpheres(path)) => {
+                    let c = |s: &PathSphere| [s.centre.x, s.centre.y, s.centre.z];
+                    if !path
+                        .spheres
                         .iter()
-                        .all(|(c, i)| within_100_m(c) && (*i as usize) < n_spheres)
+                        .all(|s| within_100_m(&c(s)) && (s.sphere as usize) < n_spheres)
                     {
                         return Err(bad("a swept sphere"));
                     }
-                    let spheres = s
-                        .iter()
-                        .map(|(c, sphere)| PathSphere {
-                            centre: nalgebra::Vector3::new(c[0], c[1], c[2]),
-                            sphere: *sphere,
-                        })
-                        .collect();
-                    Some(Arc::new(SweptPath::new(spheres)))
+                    Some(path.clone())
                 }
                 None => None,
             };
@@ -154,14 +143,7 @@ fn lessons_state(l: &Lessons) -> LessonsState {
                     let frame = FRAMES.iter().position(|g| *g == f).unwrap_or_default();
                     (frame as u8, pose_state(&p))
                 }),
-                sweep: l.sweep.as_ref().map(|s| {
-                    PathSpheres(
-                        s.spheres
-                            .iter()
-                            .map(|p| ([p.centre.x, p.centre.y, p.centre.z], p.sphere))
-                            .collect(),
-                    )
-                }),
+                sweep: l.sweep.clone().map(PathSpheres),
                 arm: l.arm.as_ref().map(|(path, dt, rdmp)| ArmState {
                     rdmp: RdmpState::of(rdmp),
                     path: path.clone(),

@@ -282,7 +282,7 @@ impl Setup {
         for &d in order.iter().take(steps) {
             let t0 = Instant::now();
             learner.add(&self.lessons[d]);
-            let knowledge = learner.knowledge(&|_| {});
+            let knowledge = learner.knowledge(&|_| {})?;
             let blob = compile(&knowledge)
                 .with_context(|| format!("compiling after {}", self.lessons[d].demonstration))?;
             let learn_s = t0.elapsed().as_secs_f64();
@@ -377,7 +377,7 @@ impl Setup {
         let mut blob = Vec::new();
         for &d in subset {
             learner.add(&self.lessons[d]);
-            blob = compile(&learner.knowledge(&|_| {}))?;
+            blob = compile(&learner.knowledge(&|_| {})?)?;
         }
         Ok(blob)
     }
