@@ -152,6 +152,15 @@ fn appended_additions_load_as_the_learner_that_appended_them() {
     );
 }
 
+/// A learner of the dataset's first two demonstrations.
+fn first_two() -> Learner {
+    let ds = dataset();
+    let model = RobotModel::kmr_iiwa14();
+    let mut l = Learner::new(ds, &model, &LearnConfig::default()).unwrap();
+    learn_into(&mut l, &ds.demonstrations[..2], &|_| {}).unwrap();
+    l
+}
+
 /// The byte ranges of the base's sweep sections (header included), read from the layout
 /// `docs/formats.md` states: the core's length at bytes 18..26, then per location type a
 /// section's payload length (u64 LE) and CRC-32 before its payload.
@@ -174,9 +183,7 @@ fn sections(file: &[u8], types: usize) -> Vec<std::ops::Range<usize>> {
 #[test]
 fn a_sweep_is_read_only_when_its_type_is_rebuilt() {
     let ds = dataset();
-    let model = RobotModel::kmr_iiwa14();
-    let mut l = Learner::new(ds, &model, &LearnConfig::default()).unwrap();
-    learn_into(&mut l, &ds.demonstrations[..2], &|_| {}).unwrap();
+    let mut l = first_two();
     let file = l.save().unwrap();
     let names = prf_learn::learn::location_kinds(ds);
     let swept: Vec<Vec<usize>> = ds.demonstrations[2..]
@@ -244,8 +251,7 @@ fn a_fingerprint_is_the_crc_of_the_trajectory() {
 fn unfit_datasets_and_bad_files_are_refused_with_a_reason() {
     let ds = dataset();
     let model = RobotModel::kmr_iiwa14();
-    let mut l = Learner::new(ds, &model, &LearnConfig::default()).unwrap();
-    learn_into(&mut l, &ds.demonstrations[..2], &|_| {}).unwrap();
+    let mut l = first_two();
     // The same program again, under any id.
     let mut again = part(ds, 1..2);
     again.demonstrations[0].id = "d999".into();
