@@ -13,9 +13,10 @@
 //! location type holding its sweep (its length, u64 LE, CRC-32, u32 LE, and a `SweepState` in
 //! postcard). The sweeps are 97 % of the file (55.2 of 56.7 MB for the example cell) and each
 //! is checked and decoded only when read, so `prf learn --add` reads only the types its
-//! programs touch ([`crate::learn::Learner::open`]). Additions may follow the base, one per `prf learn --add`,
-//! each its length (u64 LE), CRC-32 (u32 LE) and an `AdditionState` in postcard: the file grows
-//! by appending instead of being rewritten whole, and loading replays the additions.
+//! programs touch ([`crate::learn::Learner::open`]). Additions may follow the base, one per
+//! `prf learn --add`, each its length (u64 LE), CRC-32 (u32 LE) and an `AdditionState` in
+//! postcard: the file grows by appending instead of being rewritten whole, and loading replays
+//! the additions.
 
 use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
 use prf_shared::NA;
@@ -416,8 +417,6 @@ fn f64_at(b: &[u8], i: usize) -> f64 {
     f64::from_le_bytes(core::array::from_fn(|k| b[8 * i + k]))
 }
 
-/// Centre x, y, z and radius: decoded straight into the sweep's own type (no second copy of
-/// the example cell's 38 MB of swept spheres).
 /// Writes `values` into `out` as little-endian f64s.
 fn put_f64s<'a>(out: &mut [u8], values: impl IntoIterator<Item = &'a f64>) {
     for (b, v) in out.chunks_exact_mut(8).zip(values) {
@@ -425,6 +424,8 @@ fn put_f64s<'a>(out: &mut [u8], values: impl IntoIterator<Item = &'a f64>) {
     }
 }
 
+/// Centre x, y, z and radius: decoded straight into the sweep's own type (no second copy of
+/// the example cell's 38 MB of swept spheres).
 impl Record for crate::workspace::SphereSample {
     const SIZE: usize = 32;
     fn put(&self, out: &mut [u8]) {
