@@ -115,16 +115,13 @@ impl Learner {
     pub(super) fn read_sweep(&mut self, t: usize) -> Result<(), KbError> {
         if let Some(Slot::Stored(s)) = self.sweeps.get(t) {
             let bytes = (*s.file).as_ref().get(s.range.clone()).unwrap_or_default();
-            let mut sweep = self.sweep_of(t, bytes, s.range.start)?;
-            if !s.added.is_empty() {
-                let paths: Vec<&SweptPath> = s.added.iter().map(|p| p.as_ref()).collect();
-                sweep.add_spheres(&self.robot, &paths);
-            }
+            let mut read = Slot::Ready(self.sweep_of(t, bytes, s.range.start)?);
+            // The additions' rebuilds kept (paths and splat are kept together by `replay`).
             if let Some(splat) = &s.splat {
-                sweep.set_splat(splat.clone());
+                read.replay(&self.robot, &s.added, splat.clone());
             }
             // A sweep refused by its grid stays unread: a later build is refused again.
-            let stored = std::mem::replace(&mut self.sweeps[t], Slot::Ready(sweep));
+            let stored = std::mem::replace(&mut self.sweeps[t], read);
             if let Err(e) = self.check_grid(t) {
                 self.sweeps[t] = stored;
                 return Err(e);
