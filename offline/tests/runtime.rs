@@ -9,11 +9,11 @@ use common::{chord_distance, stream_ratios};
 use nalgebra::Vector3;
 use prf_host::ideal::{Execution, execute};
 use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode};
-use prf_runtime::plan::{PlanError, plan};
+use prf_runtime::plan::{PlanError, Planner, plan};
 use prf_runtime::program::Segment;
 use prf_runtime::reverse::Reversal;
 use prf_runtime::skill_plan::{
-    Evaluation, PttClasses, PttSides, evaluate_arm_motion, trace_arm_motion,
+    Evaluation, PlanBudget, PttClasses, PttSides, evaluate_arm_motion, trace_arm_motion,
 };
 use prf_runtime::task::{Missing, TaskError};
 use prf_runtime::{LoadError, Runtime};
@@ -401,6 +401,68 @@ fn lookup_shortcuts_leave_every_plan_unchanged() {
     }
 }
 
+/// One [`Planner`] over the tasks of a floor plan plans each exactly as [`plan`] does alone
+/// (every field of the plan but the work counts) while it recalls the candidates the tasks
+/// share: on the full knowledge base (risk-0 plans) and on the reduced one with the parts
+/// moved (risky plans, whose recalled ratings meet other bounds and prunings). Every
+/// candidate the task alone integrates is either integrated or recalled. With a step budget
+/// nothing is recalled.
+#[test]
+fn a_planner_recalls_shared_candidates_and_plans_as_each_task_alone() {
+    let reduced = reduced_blob(&World::example());
+    for (bytes, world, name) in [
+        (full_blob(), World::example(), "full"),
+        (&reduced[..], shifted_world(0.02, 8.0), "reduced, 2 cm 8°"),
+        (&reduced[..], shifted_world(0.08, 0.0), "reduced, 8 cm"),
+    ] {
+        let rt = Runtime::load(bytes).expect("load");
+        let mut planner = Planner::new(&rt);
+        let (mut recalled, mut integrated, mut alone_integrated) = (0, 0, 0);
+        for ft in world_tasks(&world) {
+            let label = format!("{} ({name})", ft.label());
+            match (planner.plan(&ft.task()), plan(&rt, &ft.task())) {
+                (Ok(mut shared), Ok(alone)) => {
+                    let (s, a) = (shared.skills.stats, alone.skills.stats);
+                    assert_eq!(a.recalled, 0, "{label}");
+                    assert_eq!(s.integrations + s.recalled, a.integrations, "{label}");
+                    assert_eq!(s.bounded, a.bounded, "{label}");
+                    assert_eq!(
+                        shared.skills.j.to_bits(),
+                        alone.skills.j.to_bits(),
+                        "{label}"
+                    );
+                    shared.skills.stats = a;
+                    assert_eq!(shared, alone, "{label}");
+                    (recalled, integrated) = (recalled + s.recalled, integrated + s.integrations);
+                    alone_integrated += a.integrations;
+                }
+                (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{label}"),
+            }
+        }
+        println!(
+            "{name}: {integrated} integrations and {recalled} recalled, {alone_integrated} each task alone"
+        );
+        assert!(recalled > 0, "{name}: nothing recalled");
+    }
+    let budgeted = prf_runtime::RuntimeConfig {
+        plan_budget: PlanBudget {
+            steps: u64::MAX - 1,
+        },
+        ..Default::default()
+    };
+    let rt = Runtime::load_with(full_blob(), budgeted).expect("load");
+    let mut planner = Planner::new(&rt);
+    for ft in world_tasks(&World::example()).iter().take(3) {
+        let p = planner.plan(&ft.task()).expect("plan");
+        assert_eq!(
+            p.skills.stats.recalled,
+            0,
+            "{}: recalled within a budget",
+            ft.label()
+        );
+    }
+}
+
 /// Issue 22: with the part poses moved (2 cm and 8°: most tasks risky; 8 cm: the admissible
 /// bounds skip candidates), the bounded, reordered search still finds the grid's optimum and
 /// tie.
@@ -568,7 +630,6 @@ fn the_timing_probe_gives_the_ladders_verdict() {
 #[test]
 fn a_spent_budget_brackets_the_optimum() {
     use prf_runtime::RuntimeConfig;
-    use prf_runtime::skill_plan::PlanBudget;
     let bytes = reduced_blob(&World::example());
     let world = shifted_world(0.02, 8.0);
     let full = Runtime::load(&bytes).expect("load");
@@ -1251,7 +1312,6 @@ fn every_drive_of_the_planned_programs_is_clear() {
 #[test]
 fn every_offset_of_the_envelope_called_safe_is_sound() {
     use prf_offline::envelope::{Grid, Outcome, map, shifted};
-    use prf_runtime::skill_plan::PlanBudget;
     let world = World::example();
     let grid = Grid {
         range: 0.004,

@@ -7,6 +7,8 @@
 //! - [`task_plan`]: forward search over the blob's action templates;
 //! - [`skill_plan`]: SkillPlan-PTT (Alg. 4), decomposed and pruned;
 //! - [`plan`](mod@plan): all of the above in order, giving a [`plan::Plan`] and its [`program::Program`];
+//!   [`plan::Planner`] plans several tasks, integrating the candidates they share once
+//!   ([`recall`]);
 //! - [`executor`]: the 1 kHz state machine, with [`reverse`] for the reversed arm motions;
 //! - [`recover`]: after a fault, where the cell is in its program and the way back along the
 //!   certified path ([`retract`]);
@@ -22,6 +24,7 @@ pub mod ideal;
 pub mod load;
 pub mod plan;
 pub mod program;
+pub mod recall;
 pub mod recover;
 pub mod retract;
 pub mod reverse;
@@ -33,6 +36,6 @@ pub mod task_plan;
 
 pub use executor::{Executor, ExecutorConfig, Fault, Measured, Mode, Setpoint};
 pub use load::{LoadError, Runtime, RuntimeConfig};
-pub use plan::{Plan, PlanError, plan};
+pub use plan::{Plan, PlanError, Planner, plan};
 pub use prf_shared as shared;
 pub use task::{Placed, Task};

@@ -3,6 +3,7 @@
 
 use crate::load::{LoadError, Runtime};
 use crate::program::{Program, ProgramError, Realization};
+use crate::recall::Recall;
 use crate::skill_plan::{PttClasses, PttSides, SkillPlan, SkillPlanError, plan_skills_within};
 use crate::task::{MissingList, Resolved, Task, TaskError};
 use crate::task_plan::{ActionPlan, plan_actions};
@@ -84,6 +85,43 @@ impl core::error::Error for PlanError<'_> {}
 // Without a heap the list of missing items travels by value (about 200 bytes).
 #[allow(clippy::result_large_err)]
 pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>> {
+    plan_recalling(rt, task, None)
+}
+
+/// Plans task after task on one runtime, keeping the evaluations of arm motion candidates
+/// for the tasks after them ([`crate::recall`]): a pick or place side that several tasks
+/// share is integrated once. Each plan is the one [`plan`] gives; only
+/// [`crate::skill_plan::PlanStats`] differ (integrations and steps done, candidates
+/// recalled). Host-side: the recall is [`crate::recall::RECALL_CAPACITY`] evaluations of
+/// about 200 B.
+pub struct Planner<'r, 'a> {
+    rt: &'r Runtime<'a>,
+    recall: Recall,
+}
+
+impl<'r, 'a> Planner<'r, 'a> {
+    /// A planner on `rt` that has evaluated nothing yet.
+    pub fn new(rt: &'r Runtime<'a>) -> Self {
+        Planner {
+            rt,
+            recall: Recall::new(),
+        }
+    }
+
+    /// Plans `task` as [`plan`] does, recalling what earlier tasks evaluated.
+    #[allow(clippy::result_large_err)]
+    pub fn plan<'t>(&mut self, task: &Task<'t>) -> Result<Plan, PlanError<'t>> {
+        plan_recalling(self.rt, task, Some(&mut self.recall))
+    }
+}
+
+/// [`plan`], with evaluations recalled and kept in `recall` when given.
+#[allow(clippy::result_large_err)]
+fn plan_recalling<'t>(
+    rt: &Runtime<'_>,
+    task: &Task<'t>,
+    recall: Option<&mut Recall>,
+) -> Result<Plan, PlanError<'t>> {
     task.validate().map_err(PlanError::Task)?;
     let resolved = task.resolve(rt)?.map_err(PlanError::Infeasible)?;
     let actions = plan_actions(rt)?.ok_or(PlanError::NoActionPlan)?;
@@ -92,7 +130,7 @@ pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>
         return Err(PlanError::Skill(SkillPlanError::UnsupportedPlan));
     }
     let sides = PttSides::new(rt, task, &resolved, &classes)?;
-    let skills = plan_skills_within(rt, &sides, rt.config.plan_budget)?;
+    let skills = plan_skills_within(rt, &sides, rt.config.plan_budget, recall)?;
     let (mut program, mut stances) = (None, None);
     if let (Some(c), Some((t1, t2))) = (skills.choice, skills.timing) {
         let (s1, s2, g) = (

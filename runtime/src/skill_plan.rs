@@ -40,6 +40,7 @@
 //! motion and the gripper wait revisit the same configurations).
 
 use crate::load::{LoadError, Runtime};
+use crate::recall::{Candidate, Recall};
 use crate::task::{Resolved, Task};
 use crate::task_plan::{Action, ActionPlan, FROM, HOME, TO};
 use prf_shared::field::Field;
@@ -102,6 +103,23 @@ pub struct PlanStats {
     pub steps: u64,
     /// Integrations the paper's full grid would run (2 per grid point).
     pub grid_integrations: u64,
+    /// Candidates answered by a [`Recall`] instead of integrated.
+    pub recalled: u32,
+}
+
+impl PlanStats {
+    /// Counts an integration that came to `e`.
+    fn count(&mut self, e: &Evaluation) {
+        self.integrations += 1;
+        self.steps += e.steps() as u64;
+        match e {
+            Evaluation::Pruned { .. } => self.pruned += 1,
+            Evaluation::Failed { .. } => self.failed += 1,
+            Evaluation::TooFast { .. } => self.too_fast += 1,
+            Evaluation::Missed { .. } => self.missed += 1,
+            Evaluation::Risk { .. } | Evaluation::Capped { .. } => {}
+        }
+    }
 }
 
 /// The result of SkillPlan-PTT.
@@ -409,6 +427,8 @@ pub fn goal_bound(
 /// stance in the location frame, the arm-base-frame goal of each (stance, grasp), and the
 /// ordered skills.
 pub struct Side<'a> {
+    /// The side's location type (blob index).
+    pub location_type: u8,
     /// The side's workspace Ω+ as a distance field (location frame).
     pub field: Field<'a>,
     /// Arm base of each stance, location frame.
@@ -433,6 +453,7 @@ impl<'a> Side<'a> {
         skills: heapless::Vec<(u16, u16, bool), MAX_SKILLS>,
     ) -> Result<Self, SkillPlanError> {
         Ok(Side {
+            location_type: location_type as u8,
             // Symbolic feasibility checked the workspace exists.
             field: rt
                 .workspace(location_type)?
@@ -726,7 +747,8 @@ type Best = Option<(f64, u8, u16, ArmTiming)>;
 /// min over the side's candidates of r for grasp `grasp`, counting only candidates with
 /// r < `bound`; the first candidate in order wins ties. Candidates whose [`Side::bound`]
 /// reaches the limit are not integrated. Stops when `stats.steps` reaches `budget` (before or
-/// within an integration); the flag says it did.
+/// within an integration); the flag says it did. Candidates `recall` decides are not
+/// integrated either.
 fn side_minimum(
     rt: &Runtime<'_>,
     side: &Side<'_>,
@@ -734,6 +756,7 @@ fn side_minimum(
     bound: f64,
     budget: u64,
     stats: &mut PlanStats,
+    mut recall: Option<&mut Recall>,
 ) -> Result<(Best, bool), SkillPlanError> {
     let mut best: Best = None;
     let mut exhausted = false;
@@ -755,27 +778,34 @@ fn side_minimum(
             return false;
         };
         let arm_base = &side.arm_bases[s as usize];
-        stats.integrations += 1;
-        let cap = (budget - stats.steps).min(usize::MAX as u64) as usize;
-        let e = evaluate_arm_motion(rt, &rdmp, goal, &side.field, arm_base, limit, cap);
-        stats.steps += e.steps() as u64;
+        let candidate = Candidate::new(side.location_type, k, arm_base, goal);
+        let e = match recall.as_deref().and_then(|r| r.get(&candidate, limit)) {
+            Some(e) => {
+                stats.recalled += 1;
+                e
+            }
+            None => {
+                let cap = (budget - stats.steps).min(usize::MAX as u64) as usize;
+                let e = evaluate_arm_motion(rt, &rdmp, goal, &side.field, arm_base, limit, cap);
+                stats.count(&e);
+                if let Some(r) = recall.as_deref_mut() {
+                    r.keep(candidate, limit, &e);
+                }
+                e
+            }
+        };
         match e {
-            Evaluation::Risk { risk, timing, .. } => {
-                if risk < limit {
-                    best = Some((risk, s, k, timing));
-                    if risk <= 0.0 {
-                        return false;
-                    }
+            Evaluation::Risk { risk, timing, .. } if risk < limit => {
+                best = Some((risk, s, k, timing));
+                if risk <= 0.0 {
+                    return false;
                 }
             }
-            Evaluation::Pruned { .. } => stats.pruned += 1,
-            Evaluation::Failed { .. } => stats.failed += 1,
-            Evaluation::TooFast { .. } => stats.too_fast += 1,
-            Evaluation::Missed { .. } => stats.missed += 1,
             Evaluation::Capped { .. } => {
                 exhausted = true;
                 return false;
             }
+            _ => {}
         }
         true
     })?;
@@ -786,16 +816,20 @@ fn side_minimum(
 /// SkillPlan-PTT (Alg. 4) over the two sides: the decomposed, pruned grid search, without a
 /// budget.
 pub fn plan_skills(rt: &Runtime<'_>, sides: &PttSides<'_>) -> Result<SkillPlan, SkillPlanError> {
-    plan_skills_within(rt, sides, PlanBudget::UNLIMITED)
+    plan_skills_within(rt, sides, PlanBudget::UNLIMITED, None)
 }
 
 /// SkillPlan-PTT within `budget`: the optimum of the brute-force grid when the budget lasts;
-/// otherwise the best plan found and a lower bound of J* ([`SkillPlan::exhausted`]).
+/// otherwise the best plan found and a lower bound of J* ([`SkillPlan::exhausted`]). Without
+/// a budget, `recall` answers the candidates it holds and keeps the others' evaluations (see
+/// [`crate::recall`]); with one, it is not used.
 pub fn plan_skills_within(
     rt: &Runtime<'_>,
     sides: &PttSides<'_>,
     budget: PlanBudget,
+    recall: Option<&mut Recall>,
 ) -> Result<SkillPlan, SkillPlanError> {
+    let mut recall = recall.filter(|_| budget == PlanBudget::UNLIMITED);
     let (pick, place) = (&sides.pick, &sides.place);
     let mut stats = PlanStats {
         grid_integrations: 2
@@ -830,9 +864,13 @@ pub fn plan_skills_within(
                 + place.arm_bases.len() * place.skills.len()) as u32;
             continue;
         }
-        let (first, out) = side_minimum(rt, pick, g, bound, budget.steps, &mut stats)?;
+        let mut side = |side| {
+            let recall = recall.as_deref_mut();
+            side_minimum(rt, side, g, bound, budget.steps, &mut stats, recall)
+        };
+        let (first, out) = side(pick)?;
         let second = match (first, out) {
-            (Some(_), false) => side_minimum(rt, place, g, bound, budget.steps, &mut stats)?,
+            (Some(_), false) => side(place)?,
             _ => (None, out),
         };
         if second.1 {
