@@ -17,7 +17,7 @@
 //! recalled evaluation integrates none.
 
 use crate::skill_plan::Evaluation;
-use prf_shared::se3::Pose;
+use prf_shared::se3::{Pose, pose_bits};
 
 /// Evaluations one [`Recall`] keeps; later ones are integrated every time.
 pub const RECALL_CAPACITY: usize = 64;
@@ -41,16 +41,10 @@ impl Candidate {
         Candidate {
             location_type,
             skill,
-            arm_base: bits(arm_base),
-            goal: bits(goal),
+            arm_base: pose_bits(arm_base),
+            goal: pose_bits(goal),
         }
     }
-}
-
-/// A pose's translation and quaternion as bits: equal bits, equal evaluations.
-fn bits(p: &Pose) -> [u64; 7] {
-    let (t, q) = (&p.translation.vector, &p.rotation.coords);
-    [t.x, t.y, t.z, q.x, q.y, q.z, q.w].map(f64::to_bits)
 }
 
 /// Evaluations kept, each with the bound it was made under (see the module).

@@ -58,6 +58,13 @@ pub fn pose_to_array(p: &Pose) -> [f64; 7] {
     [t.x, t.y, t.z, q.w, q.i, q.j, q.k]
 }
 
+/// A pose's translation and quaternion (x, y, z, i, j, k, w) as bits, the sign as it is: equal
+/// bits, the same pose to every computation (a key for results computed from it).
+pub fn pose_bits(p: &Pose) -> [u64; 7] {
+    let (t, q) = (&p.translation.vector, &p.rotation.coords);
+    [t.x, t.y, t.z, q.x, q.y, q.z, q.w].map(f64::to_bits)
+}
+
 /// SO(3) logarithm: the rotation vector θ·a with θ ∈ [0, π].
 pub fn log(r: &Rot) -> Vector3<f64> {
     let q = r.quaternion();

@@ -11,7 +11,7 @@ use prf_shared::kinematics::ArmKinematics;
 use prf_shared::rdmp::Rdmp;
 use prf_shared::risk::RiskAccumulator;
 use prf_shared::robot::MAX_SPHERES;
-use prf_shared::se3::Pose;
+use prf_shared::se3::{Pose, pose_bits};
 use std::collections::{HashMap, HashSet};
 use std::sync::{Arc, Mutex};
 
@@ -107,11 +107,6 @@ const MAX_PROBES: usize = 8;
 /// At most this many bytes of streams are kept across episodes.
 const MAX_STREAM_BYTES: usize = 768 << 20;
 
-/// A pose's bits.
-fn bits(p: &Pose) -> [u64; 7] {
-    prf_shared::se3::pose_to_array(p).map(f64::to_bits)
-}
-
 /// One side, stance and grasp of a task on a blob: what a candidate needs.
 pub struct At<'s, 'a> {
     pub rt: &'s Runtime<'a>,
@@ -205,8 +200,8 @@ impl At<'_, '_> {
         let (rdmp, goal) = self.rdmp_and_goal(r)?;
         let key: CandidateKey = (
             format!("{rdmp:?}"),
-            bits(goal),
-            bits(&self.side.arm_bases[self.s]),
+            pose_bits(goal),
+            pose_bits(&self.side.arm_bases[self.s]),
         );
         let lock = || {
             shared
