@@ -11,6 +11,7 @@ use prf_host::ideal::{Execution, execute};
 use prf_runtime::executor::{Executor, ExecutorConfig, Fault, Measured, Mode};
 use prf_runtime::plan::{PlanError, Planner, plan};
 use prf_runtime::program::Segment;
+use prf_runtime::recall::HOST_SLOTS;
 use prf_runtime::reverse::Reversal;
 use prf_runtime::skill_plan::{
     Evaluation, PlanBudget, PttClasses, PttSides, evaluate_arm_motion, trace_arm_motion,
@@ -416,7 +417,8 @@ fn a_planner_recalls_shared_candidates_and_plans_as_each_task_alone() {
         (&reduced[..], shifted_world(0.08, 0.0), "reduced, 8 cm"),
     ] {
         let rt = Runtime::load(bytes).expect("load");
-        let mut planner = Planner::new(&rt);
+        let mut slots = vec![None; HOST_SLOTS];
+        let mut planner = Planner::new(&rt, &mut slots);
         let (mut recalled, mut integrated, mut alone_integrated) = (0, 0, 0);
         for ft in world_tasks(&world) {
             let label = format!("{} ({name})", ft.label());
@@ -451,7 +453,8 @@ fn a_planner_recalls_shared_candidates_and_plans_as_each_task_alone() {
         ..Default::default()
     };
     let rt = Runtime::load_with(full_blob(), budgeted).expect("load");
-    let mut planner = Planner::new(&rt);
+    let mut slots = vec![None; HOST_SLOTS];
+    let mut planner = Planner::new(&rt, &mut slots);
     for ft in world_tasks(&World::example()).iter().take(3) {
         let p = planner.plan(&ft.task()).expect("plan");
         assert_eq!(

@@ -3,7 +3,7 @@
 
 use crate::load::{LoadError, Runtime};
 use crate::program::{Program, ProgramError, Realization};
-use crate::recall::Recall;
+use crate::recall::{Kept, Recall};
 use crate::skill_plan::{PttClasses, PttSides, SkillPlan, SkillPlanError, plan_skills_within};
 use crate::task::{MissingList, Resolved, Task, TaskError};
 use crate::task_plan::{ActionPlan, plan_actions};
@@ -92,19 +92,19 @@ pub fn plan<'t>(rt: &Runtime<'_>, task: &Task<'t>) -> Result<Plan, PlanError<'t>
 /// for the tasks after them ([`crate::recall`]): a pick or place side that several tasks
 /// share is integrated once. Each plan is the one [`plan`] gives; only
 /// [`crate::skill_plan::PlanStats`] differ (integrations and steps done, candidates
-/// recalled). Host-side: the recall is [`crate::recall::RECALL_CAPACITY`] evaluations of
-/// about 200 B.
-pub struct Planner<'r, 'a> {
+/// recalled).
+pub struct Planner<'r, 'a, 's> {
     rt: &'r Runtime<'a>,
-    recall: Recall,
+    recall: Recall<'s>,
 }
 
-impl<'r, 'a> Planner<'r, 'a> {
-    /// A planner on `rt` that has evaluated nothing yet.
-    pub fn new(rt: &'r Runtime<'a>) -> Self {
+impl<'r, 'a, 's> Planner<'r, 'a, 's> {
+    /// A planner on `rt` that has evaluated nothing yet and keeps evaluations in `slots`
+    /// (200 B each; the host tools give [`crate::recall::HOST_SLOTS`]).
+    pub fn new(rt: &'r Runtime<'a>, slots: &'s mut [Option<Kept>]) -> Self {
         Planner {
             rt,
-            recall: Recall::new(),
+            recall: Recall::new(slots),
         }
     }
 
@@ -120,7 +120,7 @@ impl<'r, 'a> Planner<'r, 'a> {
 fn plan_recalling<'t>(
     rt: &Runtime<'_>,
     task: &Task<'t>,
-    recall: Option<&mut Recall>,
+    recall: Option<&mut Recall<'_>>,
 ) -> Result<Plan, PlanError<'t>> {
     task.validate().map_err(PlanError::Task)?;
     let resolved = task.resolve(rt)?.map_err(PlanError::Infeasible)?;

@@ -756,7 +756,7 @@ fn side_minimum(
     bound: f64,
     budget: u64,
     stats: &mut PlanStats,
-    mut recall: Option<&mut Recall>,
+    mut recall: Option<&mut Recall<'_>>,
 ) -> Result<(Best, bool), SkillPlanError> {
     let mut best: Best = None;
     let mut exhausted = false;
@@ -827,7 +827,7 @@ pub fn plan_skills_within(
     rt: &Runtime<'_>,
     sides: &PttSides<'_>,
     budget: PlanBudget,
-    recall: Option<&mut Recall>,
+    recall: Option<&mut Recall<'_>>,
 ) -> Result<SkillPlan, SkillPlanError> {
     let mut recall = recall.filter(|_| budget == PlanBudget::UNLIMITED);
     let (pick, place) = (&sides.pick, &sides.place);

@@ -307,6 +307,7 @@ fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
     use prf_runtime::Runtime;
     use prf_runtime::executor::{Executor, ExecutorConfig, Mode};
     use prf_runtime::plan::{Planner, plan};
+    use prf_runtime::recall::HOST_SLOTS;
     use prf_runtime::reverse::Reversal;
     use prf_runtime::skill_plan::PttSides;
     use prf_shared::field::Lookups;
@@ -331,7 +332,8 @@ fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
     let tasks = world_tasks(&World::example());
     let (mut integrations, mut grid, mut steps, mut feasible) = (0u64, 0u64, 0u64, 0);
     let (mut recalled, mut alone) = (0u64, 0u64);
-    let mut planner = Planner::new(&rt);
+    let mut slots = vec![None; HOST_SLOTS];
+    let mut planner = Planner::new(&rt, &mut slots);
     for ft in &tasks {
         if let Ok(p) = planner.plan(&ft.task()) {
             integrations += p.skills.stats.integrations as u64;
@@ -352,8 +354,8 @@ fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
         crate::cli::args::runtime(&bytes, path, config)
     };
     let (anchored_rt, full_rt) = (with(Lookups::Anchored)?, with(Lookups::Full)?);
-    let plan_all = |rt: &Runtime<'_>| {
-        let mut planner = Planner::new(rt);
+    let mut plan_all = |rt: &Runtime<'_>| {
+        let mut planner = Planner::new(rt, &mut slots);
         for ft in &tasks {
             black_box(planner.plan(&ft.task()).is_ok());
         }
@@ -446,12 +448,13 @@ fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
         );
     }
     println!(
-        "\nruntime RAM: Runtime {} B, Executor {} B + reversal memory {} B, planner sides {} B (stack, while planning), a Planner's recall {} B (host)",
+        "\nruntime RAM: Runtime {} B, Executor {} B + reversal memory {} B, planner sides {} B (stack, while planning), a Planner's recall {} B per evaluation kept ({} slots on the host, heap)",
         std::mem::size_of::<Runtime>(),
         std::mem::size_of::<Executor>(),
         std::mem::size_of::<Reversal>(),
         std::mem::size_of::<PttSides>(),
-        std::mem::size_of::<prf_runtime::recall::Recall>()
+        std::mem::size_of::<Option<prf_runtime::recall::Kept>>(),
+        HOST_SLOTS
     );
     Ok(())
 }

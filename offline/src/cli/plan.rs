@@ -7,6 +7,7 @@ use prf_files::dataset::trajectory_csv;
 use prf_runtime::executor::planar;
 use prf_runtime::plan::{Plan, PlanError, Planner, plan};
 use prf_runtime::program::Program;
+use prf_runtime::recall::HOST_SLOTS;
 use prf_runtime::skill_plan::{MAX_TIME_SCALE, PlanBudget};
 use prf_runtime::{Runtime, RuntimeConfig};
 use prf_shared::motion::Param;
@@ -353,7 +354,8 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
     );
     let (mut total_ms, mut integrations, mut grid, mut feasible) = (0.0, 0u64, 0u64, 0);
     let (mut bounded, mut steps, mut recalled) = (0u64, 0u64, 0u64);
-    let mut planner = Planner::new(rt);
+    let mut slots = vec![None; HOST_SLOTS];
+    let mut planner = Planner::new(rt, &mut slots);
     for (i, ft) in tasks.iter().enumerate() {
         let t0 = Instant::now();
         let result = planner.plan(&ft.task());
