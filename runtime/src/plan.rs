@@ -100,7 +100,7 @@ pub struct Planner<'r, 'a, 's> {
 
 impl<'r, 'a, 's> Planner<'r, 'a, 's> {
     /// A planner on `rt` that has evaluated nothing yet and keeps evaluations in `slots`
-    /// (200 B each; the host tools give [`crate::recall::HOST_SLOTS`]).
+    /// (208 B each; the host tools give [`crate::recall::HOST_SLOTS`]).
     pub fn new(rt: &'r Runtime<'a>, slots: &'s mut [Option<Kept>]) -> Self {
         Planner {
             rt,

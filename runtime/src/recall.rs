@@ -1,10 +1,11 @@
 //! Arm-motion evaluations kept across the tasks planned on one runtime.
 //!
 //! An evaluation ([`crate::skill_plan::evaluate_arm_motion`]) is a pure function of the
-//! side's workspace (its location type), the skill, the stance's arm base, the goal (both in
-//! the location's frame) and the bound; the RDMP always starts at q_a,H. Tasks that share a
-//! side share these: the 18 tasks of the example cell have 6 pick sides and 12 place sides,
-//! not 36. [`Recall`] keeps each evaluation with the bound it was made under and answers a
+//! side's workspace (its location type), the skill, the stance's arm base (location frame),
+//! the goal (arm base frame) and the bound; the RDMP always starts at q_a,H. Tasks that
+//! share a side share these: the 18 tasks of the example cell integrate 12 candidates instead
+//! of 36 (its two parts have the same grasps, and a place at CNC1 or CNC2 is the same motion
+//! in the location's frame). [`Recall`] keeps each evaluation with the bound it was made under and answers a
 //! later candidate with the same inputs exactly as integrating it again would:
 //! - a rated risk r (made under a bound above r): under a bound above r, the same rating
 //!   (the running risk never reached either bound, so the same lookups ran); under a bound at
@@ -24,7 +25,7 @@ use crate::skill_plan::Evaluation;
 use prf_shared::se3::{Pose, pose_bits};
 
 /// The slots the host tools give a [`Recall`]: more than the 18 tasks of the example cell
-/// integrate with their parts moved 2 cm and 8° (5,160 integrations); 1.6 MB at 200 B each.
+/// integrate with their parts moved 2 cm and 8° (5,160 integrations); 1.7 MB at 208 B each.
 pub const HOST_SLOTS: usize = 8192;
 
 /// One kept evaluation: the candidate, the bound it was made under, what it came to.
@@ -34,7 +35,7 @@ pub type Kept = (Candidate, f64, Evaluation);
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Candidate {
     /// The side's location type (its workspace).
-    pub location_type: u8,
+    pub location_type: usize,
     /// The skill (blob index).
     pub skill: u16,
     /// The stance's arm base, location frame.
@@ -45,7 +46,7 @@ pub struct Candidate {
 
 impl Candidate {
     /// The candidate of `skill` at a side of `location_type`, from `arm_base` to `goal`.
-    pub fn new(location_type: u8, skill: u16, arm_base: &Pose, goal: &Pose) -> Self {
+    pub fn new(location_type: usize, skill: u16, arm_base: &Pose, goal: &Pose) -> Self {
         Candidate {
             location_type,
             skill,

@@ -428,7 +428,7 @@ pub fn goal_bound(
 /// ordered skills.
 pub struct Side<'a> {
     /// The side's location type (blob index).
-    pub location_type: u8,
+    pub location_type: usize,
     /// The side's workspace Ω+ as a distance field (location frame).
     pub field: Field<'a>,
     /// Arm base of each stance, location frame.
@@ -453,7 +453,7 @@ impl<'a> Side<'a> {
         skills: heapless::Vec<(u16, u16, bool), MAX_SKILLS>,
     ) -> Result<Self, SkillPlanError> {
         Ok(Side {
-            location_type: location_type as u8,
+            location_type,
             // Symbolic feasibility checked the workspace exists.
             field: rt
                 .workspace(location_type)?
