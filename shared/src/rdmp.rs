@@ -17,8 +17,8 @@
 //! limits and non-finite values stop integration with a typed [`RdmpError`].
 
 use crate::dmp::{
-    Ahead, DmpError, DmpParams, Forcing, MAX_BASES, MIN_SAMPLES, Phase, PositionDmp, PositionState,
-    RotationDmp, RotationState,
+    Ahead, Basis, DmpError, DmpParams, Forcing, MAX_BASES, MIN_SAMPLES, Phase, PositionDmp,
+    PositionState, RotationDmp, RotationState,
 };
 use crate::kinematics::ArmKinematics;
 use crate::nullspace::{JacobianQr, kernel};
@@ -386,6 +386,20 @@ impl RdmpRun {
         goal: &Pose,
         cfg: &RdmpConfig,
     ) -> Result<Self, RdmpError> {
+        Self::new_on(None, model, rdmp, q0, goal, cfg)
+    }
+
+    /// [`RdmpRun::new`] with the phase's bases copied from `basis` when they are the RDMP's
+    /// ([`Basis::is_for`]): the same run, bit for bit, without computing the n_g bases (the
+    /// costly part of a start on a controller without a fast `exp`).
+    pub fn new_on(
+        basis: Option<&Basis>,
+        model: &RobotModel,
+        rdmp: &Rdmp,
+        q0: &JointVector,
+        goal: &Pose,
+        cfg: &RdmpConfig,
+    ) -> Result<Self, RdmpError> {
         if !(cfg.gain >= 0.0 && cfg.gain * cfg.dt < 1.0 && cfg.min_manipulability >= 0.0) {
             return Err(RdmpError::BadConfig);
         }
@@ -394,9 +408,12 @@ impl RdmpRun {
         }
         let start = ArmKinematics::new(model, q0).tcp;
         // The three DMPs share one phase (the position DMP's, as in `step`): it is built once.
-        let (position, phase) =
-            rdmp.position
-                .start(&start.translation.vector, &goal.translation.vector, cfg.dt)?;
+        let (position, phase) = rdmp.position.start_on(
+            basis,
+            &start.translation.vector,
+            &goal.translation.vector,
+            cfg.dt,
+        )?;
         if goal.rotation.coords.iter().any(|v| !v.is_finite()) || !rdmp.gamma_goal.is_finite() {
             return Err(RdmpError::NonFinite { step: 0 });
         }
@@ -412,6 +429,11 @@ impl RdmpRun {
             gamma_measured: 0.0,
             previous: None,
         })
+    }
+
+    /// The bases of this run's phase (to start the next run on, [`RdmpRun::new_on`]).
+    pub fn basis(&self) -> &Basis {
+        &self.phase.basis
     }
 
     /// Current joint configuration.

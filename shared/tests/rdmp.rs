@@ -253,3 +253,52 @@ fn bad_input_gives_typed_errors() {
         RdmpError::Finished
     );
 }
+
+/// A run started on another run's bases steps as a run that computed its own, bit for bit,
+/// when they are the same DMP parameters; bases of other parameters are not taken.
+#[test]
+fn a_run_started_on_reused_bases_steps_as_a_fresh_one() {
+    let f = fixture();
+    let q0 = JointVector::from(f.demo[0]);
+    let goal = tcp(&f.model, &JointVector::from(*f.demo.last().unwrap()))
+        * Translation3::new(0.03, -0.02, 0.01);
+    let bits = |run: &mut RdmpRun| -> Vec<u64> {
+        let mut out = Vec::new();
+        while !run.finished() {
+            let s = run.step(&f.model, &f.rdmp, &f.cfg).unwrap();
+            out.extend(s.q.iter().chain(s.qd.iter()).map(|v| v.to_bits()));
+        }
+        out
+    };
+    let fresh = bits(&mut RdmpRun::new(&f.model, &f.rdmp, &q0, &goal, &f.cfg).unwrap());
+    // The bases of a run of another RDMP with the same parameters (another duration).
+    let other = f.rdmp.time_scaled(1.7);
+    let donor = RdmpRun::new(&f.model, &other, &q0, &goal, &f.cfg).unwrap();
+    assert!(donor.basis().is_for(&f.rdmp.position.params));
+    let mut reused = RdmpRun::new_on(Some(donor.basis()), &f.model, &f.rdmp, &q0, &goal, &f.cfg);
+    assert_eq!(bits(reused.as_mut().unwrap()), fresh);
+    // Bases of other parameters are not taken: 20 bases, or another phase rate.
+    for params in [
+        DmpParams {
+            n_basis: 20,
+            ..f.rdmp.position.params
+        },
+        DmpParams {
+            alpha_zeta: f.rdmp.position.params.alpha_zeta * (1.0 + f64::EPSILON),
+            ..f.rdmp.position.params
+        },
+    ] {
+        let basis = prf_shared::dmp::Basis::new(&params).unwrap();
+        assert!(!basis.is_for(&f.rdmp.position.params));
+        let mut run = RdmpRun::new_on(Some(&basis), &f.model, &f.rdmp, &q0, &goal, &f.cfg).unwrap();
+        assert_eq!(bits(&mut run), fresh);
+    }
+    // Bad parameters are refused as without reused bases.
+    let mut bad = f.rdmp;
+    bad.position.params.alpha_z = f64::NAN;
+    assert!(RdmpRun::new(&f.model, &bad, &q0, &goal, &f.cfg).is_err());
+    assert_eq!(
+        RdmpRun::new_on(Some(donor.basis()), &f.model, &bad, &q0, &goal, &f.cfg).err(),
+        RdmpRun::new(&f.model, &bad, &q0, &goal, &f.cfg).err()
+    );
+}

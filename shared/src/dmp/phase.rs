@@ -29,6 +29,8 @@ pub struct Basis {
     /// room to spare (as with centres spread evenly in time): the bases that can be active at
     /// ζ are then a contiguous run, found by bisection ([`Basis::candidates`]).
     sorted: bool,
+    /// The phase rate α_ζ the centres were spread with ([`Basis::is_for`]).
+    alpha_zeta: f64,
 }
 
 /// Normalised, phase-gated activations φ_i(ζ) = ψ_i(ζ) ζ / Σ_j ψ_j(ζ); non-zero only in
@@ -55,14 +57,7 @@ impl Features {
 impl Basis {
     /// The bases of `p`, centres spread evenly in time.
     pub fn new(p: &DmpParams) -> Result<Self, DmpError> {
-        let positive = |x: f64| x > 0.0 && x.is_finite();
-        let valid = (2..=MAX_BASES).contains(&p.n_basis)
-            && positive(p.alpha_zeta)
-            && positive(p.alpha_z)
-            && positive(p.beta_z);
-        if !valid {
-            return Err(DmpError::BadParams);
-        }
+        check(p)?;
         let n = p.n_basis;
         let mut centres = [0.0; MAX_BASES];
         let mut widths = [0.0; MAX_BASES];
@@ -80,7 +75,14 @@ impl Basis {
             centres,
             widths,
             sorted,
+            alpha_zeta: p.alpha_zeta,
         })
+    }
+
+    /// True if these are the bases of `p`: [`Basis::new`] depends only on n_g and α_ζ, so
+    /// it would compute these same values (n_g exponentials) again.
+    pub fn is_for(&self, p: &DmpParams) -> bool {
+        self.n == p.n_basis && self.alpha_zeta.to_bits() == p.alpha_zeta.to_bits()
     }
 
     /// The exponent h_i (ζ − c_i)² of basis i and the sign of ζ − c_i, computed as
@@ -159,6 +161,21 @@ impl Basis {
     }
 }
 
+/// The parameters a [`Basis`] and a [`Phase`] need: 2 ≤ n_g ≤ [`MAX_BASES`], and the rates
+/// and gains positive and finite.
+fn check(p: &DmpParams) -> Result<(), DmpError> {
+    let positive = |x: f64| x > 0.0 && x.is_finite();
+    let valid = (2..=MAX_BASES).contains(&p.n_basis)
+        && positive(p.alpha_zeta)
+        && positive(p.alpha_z)
+        && positive(p.beta_z);
+    if valid {
+        Ok(())
+    } else {
+        Err(DmpError::BadParams)
+    }
+}
+
 /// True if the windows c_i ± √([`CLEARLY_NEGLIGIBLE`]/h_i) fall strictly with i at both
 /// ends, by more than 1e-9 of their radii (far beyond the exponent's rounding). Since
 /// h_i = 2/(c_{i+1} − c_i)² (h_{n−1} = h_{n−2}), the radius is √(T/2)·|c_{i+1} − c_i| to a few
@@ -228,7 +245,18 @@ pub struct Phase {
 impl Phase {
     /// Phase for a motion of duration `tau` integrated with step `dt`.
     pub fn new(p: &DmpParams, tau: f64, dt: f64) -> Result<Self, DmpError> {
-        let mut phase = Phase::unset(p, tau, dt)?;
+        Phase::new_on(None, p, tau, dt)
+    }
+
+    /// [`Phase::new`] with the bases copied from `basis` when they are `p`'s
+    /// ([`Basis::is_for`]): the same phase, bit for bit, without the n_g exponentials.
+    pub fn new_on(
+        basis: Option<&Basis>,
+        p: &DmpParams,
+        tau: f64,
+        dt: f64,
+    ) -> Result<Self, DmpError> {
+        let mut phase = Phase::unset(basis, p, tau, dt)?;
         let [current, next] = &mut phase.features;
         phase.basis.features_into(1.0, current);
         phase.basis.features_into(phase.zeta_next, next);
@@ -237,15 +265,18 @@ impl Phase {
 
     /// The phase at step 0 with no features computed yet (all zero), for [`Phase::new`] and
     /// [`Phase::resume`] to fill in place.
-    fn unset(p: &DmpParams, tau: f64, dt: f64) -> Result<Self, DmpError> {
+    fn unset(basis: Option<&Basis>, p: &DmpParams, tau: f64, dt: f64) -> Result<Self, DmpError> {
         if !(dt > 0.0 && tau >= dt && tau.is_finite()) {
             return Err(DmpError::BadParams);
         }
-        let basis = Basis::new(p)?;
+        check(p)?;
         let decay = libm::exp(-p.alpha_zeta * dt / tau);
         let end = libm::round(tau / dt) as usize;
         Ok(Phase {
-            basis,
+            basis: match basis {
+                Some(b) if b.is_for(p) => *b,
+                _ => Basis::new(p)?,
+            },
             step: 0,
             n_steps: end,
             end,
@@ -303,7 +334,7 @@ impl Phase {
         zeta: f64,
         zeta_next: f64,
     ) -> Result<Self, DmpError> {
-        let mut phase = Phase::unset(p, tau, dt)?;
+        let mut phase = Phase::unset(None, p, tau, dt)?;
         phase.seek(step, zeta, zeta_next);
         Ok(phase)
     }

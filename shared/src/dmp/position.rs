@@ -64,12 +64,24 @@ impl<const N: usize> PositionDmp<N> {
         goal: &SVector<f64, N>,
         dt: f64,
     ) -> Result<(PositionState<N>, Phase), DmpError> {
+        self.start_on(None, y0, goal, dt)
+    }
+
+    /// [`PositionDmp::start`] with the phase's bases taken from `basis` when they are this
+    /// DMP's ([`Phase::new_on`]).
+    pub fn start_on(
+        &self,
+        basis: Option<&Basis>,
+        y0: &SVector<f64, N>,
+        goal: &SVector<f64, N>,
+        dt: f64,
+    ) -> Result<(PositionState<N>, Phase), DmpError> {
         if y0.iter().chain(goal.iter()).any(|v| !v.is_finite()) {
             return Err(DmpError::NonFinite { sample: 0 });
         }
         Ok((
             PositionState::new(y0, goal),
-            Phase::new(&self.params, self.tau, dt)?,
+            Phase::new_on(basis, &self.params, self.tau, dt)?,
         ))
     }
 
