@@ -406,8 +406,8 @@ fn lookup_shortcuts_leave_every_plan_unchanged() {
 /// (every field of the plan but the work counts) while it recalls the candidates the tasks
 /// share: on the full knowledge base (risk-0 plans) and on the reduced one with the parts
 /// moved (risky plans, whose recalled ratings meet other bounds and prunings). Every
-/// candidate the task alone integrates is either integrated or recalled. With a step budget
-/// nothing is recalled.
+/// candidate the task alone integrates is either integrated or recalled; on the full one no
+/// side is integrated twice. With a step budget nothing is recalled.
 #[test]
 fn a_planner_recalls_shared_candidates_and_plans_as_each_task_alone() {
     let reduced = reduced_blob(&World::example());
@@ -445,6 +445,24 @@ fn a_planner_recalls_shared_candidates_and_plans_as_each_task_alone() {
             "{name}: {integrated} integrations and {recalled} recalled, {alone_integrated} each task alone"
         );
         assert!(recalled > 0, "{name}: nothing recalled");
+        if name == "full" {
+            // Risk-0 plans: each pick side (part type, location) and each place side is
+            // integrated once at most, place sides whichever location the part came from.
+            let sides: std::collections::BTreeSet<_> = world_tasks(&world)
+                .iter()
+                .flat_map(|ft| {
+                    [
+                        ("pick", ft.part.1.clone(), ft.from.0.clone()),
+                        ("place", ft.part.1.clone(), ft.to.0.clone()),
+                    ]
+                })
+                .collect();
+            assert!(
+                integrated as usize <= sides.len(),
+                "{name}: {integrated} integrations for {} sides",
+                sides.len()
+            );
+        }
     }
     let budgeted = prf_runtime::RuntimeConfig {
         plan_budget: PlanBudget {

@@ -4,7 +4,9 @@
 use crate::load::{LoadError, Runtime};
 use crate::program::{Program, ProgramError, Realization};
 use crate::recall::{Kept, Recall};
-use crate::skill_plan::{PttClasses, PttSides, SkillPlan, SkillPlanError, plan_skills_within};
+use crate::skill_plan::{
+    self, PttClasses, PttSides, SkillPlan, SkillPlanError, plan_skills_within,
+};
 use crate::task::{MissingList, Resolved, Task, TaskError};
 use crate::task_plan::{ActionPlan, plan_actions};
 use prf_shared::motion::Goal;
@@ -143,13 +145,17 @@ fn plan_recalling<'t>(
         let p2 = *sides.place.platform.get(s2).ok_or(missing)?;
         let pick_goal = *sides.pick.goal(s1, g).ok_or(missing)?;
         let place_goal = *sides.place.goal(s2, g).ok_or(missing)?;
+        let grasp = skill_plan::grasp(rt, resolved.part_type, g)?.ok_or(missing)?;
         let realized = [
             Realization {
                 goal: Goal::Base(p1),
                 skill: None,
             },
             Realization {
-                goal: Goal::Tcp(pick_goal),
+                goal: Goal::Tcp {
+                    pose: pick_goal,
+                    grasp,
+                },
                 skill: Some((c.pick_skill, t1)),
             },
             Realization {
@@ -157,7 +163,10 @@ fn plan_recalling<'t>(
                 skill: None,
             },
             Realization {
-                goal: Goal::Tcp(place_goal),
+                goal: Goal::Tcp {
+                    pose: place_goal,
+                    grasp,
+                },
                 skill: Some((c.place_skill, t2)),
             },
             Realization {

@@ -132,7 +132,7 @@ impl Program {
             for g in class.generators() {
                 let seg = match (g, r.goal, r.skill) {
                     (Generator::BaseMove, Goal::Base(goal), _) => Segment::Base { goal },
-                    (Generator::ArmRdmp, Goal::Tcp(goal), Some((skill, timing))) => {
+                    (Generator::ArmRdmp, Goal::Tcp { pose: goal, .. }, Some((skill, timing))) => {
                         rt.blob
                             .skill(skill as usize)
                             .map_err(LoadError::from)?
@@ -150,7 +150,7 @@ impl Program {
                             scale: timing.scale,
                         }
                     }
-                    (Generator::ArmRdmpReversed, Goal::Tcp(_), Some(_)) => {
+                    (Generator::ArmRdmpReversed, Goal::Tcp { .. }, Some(_)) => {
                         Segment::Reverse { steps: arm_steps }
                     }
                     (Generator::Grip { close }, _, _) => Segment::Grip { close: *close },

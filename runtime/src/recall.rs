@@ -3,10 +3,12 @@
 //! An evaluation ([`crate::skill_plan::evaluate_arm_motion`]) is a pure function of the
 //! side's workspace (its location type), the skill, the stance's arm base (location frame),
 //! the goal (arm base frame) and the bound; the RDMP always starts at q_a,H. Tasks that
-//! share a side share these: the 18 tasks of the example cell integrate 12 candidates instead
-//! of 36 (Part1's nine tasks share three pick sides; Part2's grasps and poses are Part1's, so
-//! its tasks recall all of theirs). [`Recall`] keeps each evaluation with the bound it was made under and answers a
-//! later candidate with the same inputs exactly as integrating it again would:
+//! share a side share these: the 18 tasks of the example cell integrate 9 candidates instead
+//! of 36 (Part1's nine tasks share three pick sides and six place sides, since a place goal is
+//! made from the grasp held, whichever location the part came from; Part2's grasps and poses
+//! are Part1's, so its tasks recall all of theirs). [`Recall`] keeps each evaluation with the
+//! bound it was made under and answers a later candidate with the same inputs exactly as
+//! integrating it again would:
 //! - a rated risk r (made under a bound above r): under a bound above r, the same rating
 //!   (the running risk never reached either bound, so the same lookups ran); under a bound at
 //!   or below r, pruned with the same steps (pruning does not change the timing);

@@ -654,6 +654,17 @@ fn context<'c>(
     }
 }
 
+/// Grasp `g` (T_e^p) of part type `part_type`; `None` past the last.
+pub fn grasp(rt: &Runtime<'_>, part_type: usize, g: usize) -> Result<Option<Pose>, SkillPlanError> {
+    // Blob::parse checked every grasp is a finite unit-quaternion pose.
+    Ok(rt
+        .blob
+        .part_type(part_type)?
+        .grasps
+        .get(g)
+        .and_then(|g| pose_from_array(*g)))
+}
+
 /// The two sides of a PTT plan, with goals from the classes' Y, G and Φ_x.
 pub struct PttSides<'a> {
     /// The pick side, at ℓ1.
@@ -674,10 +685,12 @@ impl<'a> PttSides<'a> {
     ) -> Result<Self, SkillPlanError> {
         let model = &rt.model;
         let mut grasps: heapless::Vec<Pose, MAX_AFFORDANCES> = heapless::Vec::new();
-        for g in rt.blob.part_type(r.part_type)?.grasps.iter() {
-            // Blob::parse checked every grasp is a finite unit-quaternion pose.
-            if let Some(g) = pose_from_array(*g) {
-                let _ = grasps.push(g);
+        for g in 0..MAX_AFFORDANCES {
+            match grasp(rt, r.part_type, g)? {
+                Some(g) => {
+                    let _ = grasps.push(g);
+                }
+                None => break,
             }
         }
         let from = stances(rt, r.from_type)?;
@@ -687,6 +700,7 @@ impl<'a> PttSides<'a> {
             arm: JointVector::from(model.home),
             gripper: 0.0,
             part: task.part.pose,
+            grasp: None,
         };
         let n = grasps.len();
         let mut pick = Side::new(rt, r.from_type, n, class_skills(rt, c.pick.0, r.from_type)?)?;
@@ -702,8 +716,9 @@ impl<'a> PttSides<'a> {
             result = result.and(pick.add_stance(task.from.pose, x.base, model));
             let mut g = 0;
             pk.goals(&x, &at_from, &mut |goal| {
-                if let (Goal::Tcp(p), Some(slot)) = (goal, pick.goals.get_mut(s * n + g)) {
-                    *slot = p;
+                if let (Goal::Tcp { pose, .. }, Some(slot)) = (goal, pick.goals.get_mut(s * n + g))
+                {
+                    *slot = pose;
                 }
                 // The state after Pick and its effect on Place depend on the grasp only
                 // (Alg. 4 line 8): take it at the first stance.
@@ -723,8 +738,10 @@ impl<'a> PttSides<'a> {
                     result = result.and(place.add_stance(task.to.pose, x.base, model));
                 }
                 pl.goals(&x, &at_to, &mut |goal| {
-                    if let (Goal::Tcp(p), Some(slot)) = (goal, place.goals.get_mut(s * n + g)) {
-                        *slot = p;
+                    if let (Goal::Tcp { pose, .. }, Some(slot)) =
+                        (goal, place.goals.get_mut(s * n + g))
+                    {
+                        *slot = pose;
                     }
                 });
                 s += 1;

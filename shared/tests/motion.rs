@@ -7,7 +7,7 @@ use prf_shared::motion::{
     CLASSES, Goal, GoalContext, PhysicalState, Sample, TaskLocation, Value, class,
 };
 use prf_shared::robot::RobotModel;
-use prf_shared::se3::{Pose, pose_from_xyz_rpy};
+use prf_shared::se3::{Pose, pose_bits, pose_from_xyz_rpy};
 
 #[test]
 fn templates_are_well_formed() {
@@ -46,6 +46,7 @@ fn pick_move_place_put_the_part_on_its_goal() {
         arm: JointVector::from(model.home),
         gripper: 0.0,
         part,
+        grasp: None,
     };
     fn cx<'a>(
         model: &'a RobotModel,
@@ -73,6 +74,7 @@ fn pick_move_place_put_the_part_on_its_goal() {
     };
     let x1 = pick.transition(&model, &x0, &g);
     assert_eq!(x1.gripper, 1.0);
+    assert_eq!(x1.grasp, Some(grasp), "the grasp is held");
     // Held: the TCP sits on the grasp of the part.
     let rel = x1.part.inverse() * x1.tcp(&model);
     assert!((rel.inverse() * grasp).translation.vector.norm() < 1e-12);
@@ -109,6 +111,7 @@ fn pick_move_place_put_the_part_on_its_goal() {
     });
     let x3 = place.transition(&model, &x2, &goals[0]);
     assert_eq!(x3.gripper, 0.0);
+    assert_eq!(x3.grasp, None, "nothing is held");
     let d = x3.part.inverse() * goal;
     assert!(
         d.translation.vector.norm() < 1e-12 && d.rotation.angle() < 1e-12,
@@ -117,6 +120,81 @@ fn pick_move_place_put_the_part_on_its_goal() {
     // An empty-handed Move leaves the part where it is.
     let x4 = mv.transition(&model, &x3, &Goal::Base(Pose::identity()));
     assert_eq!(x4.part, x3.part);
+}
+
+/// Place's goal comes from the grasp held, so the same stance, grasp and part goal give the
+/// same bits whichever location and platform pose the part was picked at (what lets a
+/// planner recall a place evaluation across tasks). It agrees with the route through the
+/// part's pose, T_B⁻¹ T_p,g T_p⁻¹ T_B F_a(q_a), within rounding, and puts the part on its goal.
+#[test]
+fn place_goals_are_the_same_bits_whichever_location_the_part_came_from() {
+    let model = RobotModel::kmr_iiwa14();
+    let (pick, mv, place) = (
+        class("Pick").unwrap(),
+        class("Move").unwrap(),
+        class("Place").unwrap(),
+    );
+    let grasps = [pose_from_xyz_rpy(
+        [0.01, -0.02, 0.05],
+        [std::f64::consts::PI, 0.1, 0.3],
+    )];
+    let part_goal = pose_from_xyz_rpy([3.0, 1.5, 0.8], [0.0, 0.0, -1.0]);
+    let location = pose_from_xyz_rpy([3.1, 2.3, 0.0], [0.0, 0.0, -1.0]);
+    let stances = [pose_from_xyz_rpy([0.0, -0.9, 0.0], [0.0, 0.0, 1.5])];
+    let cx = |location: Pose, stances| GoalContext {
+        model: &model,
+        part_goal,
+        location,
+        stances,
+        grasps: &grasps,
+    };
+    let mut first: Option<[u64; 7]> = None;
+    for (i, (part, base)) in [
+        ([1.0, -1.2, 0.9, 0.4], [1.0, -0.4, -1.5]),
+        ([-2.3, 0.7, 1.1, 2.9], [-2.2, 0.1, 1.2]),
+        ([0.31, 4.9, 0.62, -1.7], [0.9, 4.1, 0.3]),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let x0 = PhysicalState {
+            base: pose_from_xyz_rpy([base[0], base[1], 0.0], [0.0, 0.0, base[2]]),
+            arm: JointVector::from(model.home),
+            gripper: 0.0,
+            part: pose_from_xyz_rpy([part[0], part[1], part[2]], [0.0, 0.0, part[3]]),
+            grasp: None,
+        };
+        let mut goals = Vec::new();
+        pick.goals(&x0, &cx(Pose::identity(), &[]), &mut |g| goals.push(g));
+        let x1 = pick.transition(&model, &x0, &goals[0]);
+        let mut goals = Vec::new();
+        mv.goals(&x1, &cx(location, &stances), &mut |g| goals.push(g));
+        let x2 = mv.transition(&model, &x1, &goals[0]);
+        let mut goals = Vec::new();
+        place.goals(&x2, &cx(location, &stances), &mut |g| goals.push(g));
+        let [Goal::Tcp { pose, grasp }] = goals[..] else {
+            panic!("one TCP goal")
+        };
+        assert_eq!(grasp, grasps[0]);
+        assert_eq!(
+            *first.get_or_insert(pose_bits(&pose)),
+            pose_bits(&pose),
+            "pick {i}"
+        );
+        let arm_base = x2.base * model.mount;
+        let through_part = arm_base.inverse() * part_goal * x2.part.inverse() * x2.tcp(&model);
+        let d = through_part.inverse() * pose;
+        assert!(
+            d.translation.vector.norm() < 1e-12 && d.rotation.angle() < 1e-12,
+            "pick {i}: {d:?}"
+        );
+        let x3 = place.transition(&model, &x2, &goals[0]);
+        let d = x3.part.inverse() * part_goal;
+        assert!(
+            d.translation.vector.norm() < 1e-12 && d.rotation.angle() < 1e-12,
+            "pick {i}: {d:?}"
+        );
+    }
 }
 
 #[test]

@@ -89,7 +89,8 @@ impl Generator {
     }
 }
 
-/// The physical state x = [q, T_p] (Sec. 5.3.3): platform pose, arm, gripper, part pose.
+/// The physical state x = [q, T_p] (Sec. 5.3.3): platform pose, arm, gripper, part pose, and
+/// the grasp the part is held with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PhysicalState {
     /// T_b, the platform in the world.
@@ -100,6 +101,10 @@ pub struct PhysicalState {
     pub gripper: f64,
     /// T_p, the part in the world.
     pub part: Pose,
+    /// T_e^p, the grasp the part is held with (`None` while nothing is held). Carried so that
+    /// the goals after a pick are the grasp's bits, not T_p's rounding through the pick:
+    /// Place's goal at a stance is then the same whichever location the part came from.
+    pub grasp: Option<Pose>,
 }
 
 impl PhysicalState {
@@ -113,7 +118,12 @@ impl PhysicalState {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Goal {
     /// TCP goal in the arm base frame (Pick, Place).
-    Tcp(Pose),
+    Tcp {
+        /// The TCP pose, arm base frame.
+        pose: Pose,
+        /// T_e^p, the grasp of the part the TCP reaches it with.
+        grasp: Pose,
+    },
     /// Platform goal in the world (Move).
     Base(Pose),
 }

@@ -82,7 +82,10 @@ impl MotionClass for Pick {
     fn goals(&self, x: &PhysicalState, cx: &GoalContext<'_>, out: &mut dyn FnMut(Goal)) {
         let arm_base = x.base * cx.model.mount;
         for g in cx.grasps {
-            out(Goal::Tcp(arm_base.inverse() * x.part * g));
+            out(Goal::Tcp {
+                pose: arm_base.inverse() * x.part * g,
+                grasp: *g,
+            });
         }
     }
 
@@ -93,27 +96,29 @@ impl MotionClass for Pick {
 }
 
 /// Φ_x of Pick and Place: platform and arm unchanged, the gripper set to `gripper`, and the
-/// part moved rigidly with the TCP between the goal g and the current TCP, picking
-/// (T_p ← T_B F_a(q_a) g⁻¹ T_B⁻¹ T_p) or placing (T_p ← T_B g F_a(q_a)⁻¹ T_B⁻¹ T_p).
+/// part where the goal's grasp T_e^p puts it against the TCP: picking, after the motion back
+/// to F_a(q_a) (T_p ← T_B F_a(q_a) (T_e^p)⁻¹, the grasp held); placing, at the goal
+/// (T_p ← T_B g (T_e^p)⁻¹, nothing held).
 pub(super) fn carry(
     model: &RobotModel,
     x: &PhysicalState,
     g: &Goal,
     gripper: f64,
 ) -> PhysicalState {
-    let Goal::Tcp(goal) = g else {
+    let Goal::Tcp { pose, grasp } = g else {
         return *x;
     };
     let arm_base = x.base * model.mount;
-    let tcp = ArmKinematics::new(model, &x.arm).tcp;
-    let (from, to) = if gripper >= 0.5 {
-        (goal, &tcp)
+    let closed = gripper >= 0.5;
+    let tcp = if closed {
+        ArmKinematics::new(model, &x.arm).tcp
     } else {
-        (&tcp, goal)
+        *pose
     };
     PhysicalState {
         gripper,
-        part: arm_base * to * from.inverse() * arm_base.inverse() * x.part,
+        part: arm_base * tcp * grasp.inverse(),
+        grasp: closed.then_some(*grasp),
         ..*x
     }
 }

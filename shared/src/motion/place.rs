@@ -68,13 +68,17 @@ impl MotionClass for Place {
         Initial::Arm(JointVector::from(model.home))
     }
 
-    /// G = {T_B⁻¹ T_p,g T_p⁻¹ T_B F_a(q_a)}: the TCP pose that puts the held part at its goal.
+    /// G = {T_B⁻¹ T_p,g T_e^p}: the TCP pose that puts the held part at its goal, with T_e^p
+    /// the grasp held (without one, the TCP's pose on the part, T_p⁻¹ T_B F_a(q_a)).
     fn goals(&self, x: &PhysicalState, cx: &GoalContext<'_>, out: &mut dyn FnMut(Goal)) {
         let arm_base = x.base * cx.model.mount;
-        let tcp = ArmKinematics::new(cx.model, &x.arm).tcp;
-        out(Goal::Tcp(
-            arm_base.inverse() * cx.part_goal * x.part.inverse() * arm_base * tcp,
-        ));
+        let grasp = x.grasp.unwrap_or_else(|| {
+            x.part.inverse() * arm_base * ArmKinematics::new(cx.model, &x.arm).tcp
+        });
+        out(Goal::Tcp {
+            pose: arm_base.inverse() * cx.part_goal * grasp,
+            grasp,
+        });
     }
 
     /// Gripper open; the part stays where the TCP put it.
