@@ -685,12 +685,10 @@ impl<'a> PttSides<'a> {
     ) -> Result<Self, SkillPlanError> {
         let model = &rt.model;
         let mut grasps: heapless::Vec<Pose, MAX_AFFORDANCES> = heapless::Vec::new();
-        for g in 0..MAX_AFFORDANCES {
-            match grasp(rt, r.part_type, g)? {
-                Some(g) => {
-                    let _ = grasps.push(g);
-                }
-                None => break,
+        for g in rt.blob.part_type(r.part_type)?.grasps.iter() {
+            // Blob::parse checked every grasp is a finite unit-quaternion pose.
+            if let Some(g) = pose_from_array(*g) {
+                let _ = grasps.push(g);
             }
         }
         let from = stances(rt, r.from_type)?;
