@@ -67,6 +67,13 @@ pub fn pose_bits(p: &Pose) -> [u64; 7] {
 
 /// SO(3) logarithm: the rotation vector θ·a with θ ∈ [0, π].
 pub fn log(r: &Rot) -> Vector3<f64> {
+    log_angle(r).0
+}
+
+/// [`log`] and the angle θ it scaled the axis with (`None` on the series branch near the
+/// identity, where no angle was computed).
+#[inline(always)]
+fn log_angle(r: &Rot) -> (Vector3<f64>, Option<f64>) {
     let q = r.quaternion();
     // q and −q are the same rotation: take the representative with w ≥ 0, so θ ≤ π.
     let (w, v) = if q.w >= 0.0 {
@@ -77,9 +84,10 @@ pub fn log(r: &Rot) -> Vector3<f64> {
     let s = norm(&v);
     if s < 1e-12 {
         // θ = 2·atan2(s, w) ≈ 2s/w; the series keeps full precision near the identity.
-        return v * (2.0 / w);
+        return (v * (2.0 / w), None);
     }
-    v * (2.0 * libm::atan2(s, w) / s)
+    let theta = 2.0 * libm::atan2(s, w);
+    (v * (theta / s), Some(theta))
 }
 
 /// SO(3) exponential of a rotation vector.
@@ -102,7 +110,31 @@ pub fn exp(v: &Vector3<f64>) -> Rot {
 /// error vector, so they pick the representative nearest to the previous one ("unwrapping");
 /// this is what lets a rotation DMP reproduce motions with more than 180° of travel.
 pub fn log_near(r: &Rot, reference: &Vector3<f64>) -> Vector3<f64> {
-    let v = log(r);
+    let (v, theta) = log_angle(r);
+    match theta {
+        Some(theta) if within_half_turn(&v, theta, reference) => v,
+        _ => unwrap_near(v, reference),
+    }
+}
+
+/// True when `reference` is surely within π of θ along the axis of `v` = θ·a, so that
+/// [`unwrap_near`] would add 0·2π and return `v` bit for bit: |ref·v − θ²| < 3θ, i.e. the
+/// reference's component along a within 3 rad of θ, a margin of 0.14 rad over the rounding
+/// of both ways of computing it (≤ 1e-8 rad for |ref| < 1e6 rad). It needs neither the square
+/// root, the divisions nor the rounding of the unwrapping, which sit on the RDMP step's
+/// critical path. θ ≥ 2e-6 keeps [`unwrap_near`] on its branch that uses v's own axis, whose
+/// zeros carry v's signs (so adding 0·a leaves even a −0 component as it is).
+#[inline(always)]
+fn within_half_turn(v: &Vector3<f64>, theta: f64, reference: &Vector3<f64>) -> bool {
+    theta >= 2e-6 && reference.norm_squared() < 1e12 && {
+        let off = reference.dot(v) - theta * theta;
+        off.abs() < 3.0 * theta
+    }
+}
+
+/// [`log_near`]'s unwrapping of `v` = log(r): the representative v + 2πk·a nearest to
+/// `reference` (the general path, and the whole of `log_near` before its shortcut).
+pub fn unwrap_near(v: Vector3<f64>, reference: &Vector3<f64>) -> Vector3<f64> {
     let theta = norm(&v);
     let axis = if theta > 1e-9 {
         v / theta
@@ -167,6 +199,67 @@ mod tests {
         let r = exp(&(axis * (200f64).to_radians()));
         let v = log_near(&r, &(axis * (190f64).to_radians()));
         assert!((v.z - (200f64).to_radians()).abs() < 1e-12);
+    }
+
+    /// `log_near`'s shortcut returns what the unwrapping alone returns, bit for bit, and is
+    /// taken: random rotations (near the identity and near π among them) against references
+    /// on the axis 2πk away, around the ±π boundaries of the unwrapping, off the axis, tiny,
+    /// zero, huge and NaN.
+    #[test]
+    fn log_near_is_the_unwrapping_bit_for_bit() {
+        use rand::{RngExt, SeedableRng, rngs::StdRng};
+        let mut rng = StdRng::seed_from_u64(7);
+        let (mut shortcut, mut cases) = (0, 0);
+        for i in 0..20_000 {
+            let axis = Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0f64),
+            )
+            .normalize();
+            let angle = match i % 4 {
+                0 => rng.random_range(0.0..1e-5),
+                1 => PI - rng.random_range(0.0..1e-6),
+                _ => rng.random_range(0.0..PI),
+            };
+            let r = exp(&(axis * angle));
+            let v = log(&r);
+            let a = v.normalize();
+            let off = Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            );
+            let k = rng.random_range(-3..=3) as f64;
+            let along = v.norm() + k * core::f64::consts::TAU;
+            let edge = if rng.random_bool(0.5) { PI } else { 3.0 };
+            let references = [
+                a * along,
+                a * (v.norm() + edge + rng.random_range(-1e-9..1e-9)),
+                a * (v.norm() - edge + rng.random_range(-1e-9..1e-9)),
+                a * along + off * rng.random_range(0.0..4.0),
+                off * 1e-10,
+                Vector3::zeros(),
+                a * 1e7,
+                Vector3::new(f64::NAN, 0.0, 0.0),
+            ];
+            for reference in &references {
+                let fast = log_near(&r, reference);
+                let general = unwrap_near(v, reference);
+                assert_eq!(
+                    fast.map(f64::to_bits),
+                    general.map(f64::to_bits),
+                    "angle {angle}, axis {axis:?}, reference {reference:?}"
+                );
+                let theta = log_angle(&r).1;
+                shortcut += usize::from(theta.is_some_and(|t| within_half_turn(&v, t, reference)));
+                cases += 1;
+            }
+        }
+        assert!(
+            shortcut > cases / 4 && shortcut < cases,
+            "{shortcut} of {cases}"
+        );
     }
 
     #[test]

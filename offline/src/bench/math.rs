@@ -6,13 +6,14 @@
 
 use crate::synthetic;
 use anyhow::Result;
-use nalgebra::{SMatrix, Vector6};
+use nalgebra::{SMatrix, Vector3, Vector6};
 use prf_host::stats::{percentiles, quantile};
 use prf_shared::dmp::{Basis, DmpParams, Features};
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::nullspace::{JacobianQr, kernel, pinv_apply};
 use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpRun, integrate, null_space_coordinate};
 use prf_shared::robot::RobotModel;
+use prf_shared::se3::{Rot, exp, log, log_near, unwrap_near};
 use prf_shared::{Jacobian, JointVector};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -202,6 +203,36 @@ pub fn run(args: &Args) -> Result<()> {
     report_pair(
         ("bases in ζ's window only (now)", &window),
         ("previous: every basis tested", &all),
+    );
+
+    println!(
+        "\nrotation error on the branch nearest the last one, log_near (the rotation DMP's error, Integrate (5))"
+    );
+    // A 2 s turn of 2.5 rad, each error taken against the previous one as the RDMP does.
+    let axis = Vector3::new(0.3, -0.5, 0.8).normalize();
+    let errors: Vec<(Rot, Vector3<f64>)> = (1..2000)
+        .map(|k| {
+            let at = |k: usize| axis * (2.5 * (1.0 - k as f64 / 2000.0));
+            (exp(&at(k)), at(k - 1))
+        })
+        .collect();
+    let (shortcut, unwrapped) = measure_pair(
+        secs,
+        256,
+        || {
+            ia = (ia + 1) % errors.len();
+            let (r, reference) = black_box(&errors[ia]);
+            black_box(log_near(r, reference));
+        },
+        || {
+            ib = (ib + 1) % errors.len();
+            let (r, reference) = black_box(&errors[ib]);
+            black_box(unwrap_near(log(r), reference));
+        },
+    );
+    report_pair(
+        ("within half a turn: no unwrapping (now)", &shortcut),
+        ("previous: always unwrapped", &unwrapped),
     );
 
     println!("\nnull-space basis M(q) (Sec. 4.2.1)");
