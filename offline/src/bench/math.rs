@@ -13,7 +13,7 @@ use prf_shared::kinematics::ArmKinematics;
 use prf_shared::nullspace::{JacobianQr, kernel, pinv_apply};
 use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpRun, integrate, null_space_coordinate};
 use prf_shared::robot::RobotModel;
-use prf_shared::se3::{Rot, exp, log, log_near, unwrap_near};
+use prf_shared::se3::{Pose, Rot, exp, log, log_near, unwrap_near};
 use prf_shared::{Jacobian, JointVector};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -27,6 +27,11 @@ pub struct Args {
     /// task of the example cell, executor ticks, RAM.
     #[arg(long)]
     blob: Option<std::path::PathBuf>,
+    /// Only step the bench's 2 s reach this many times (runs restarted as they finish) and
+    /// print the mean time per step: a loop to profile (`perf record`, `valgrind
+    /// --tool=callgrind`) or to time whole processes of two builds against each other.
+    #[arg(long, value_name = "N")]
+    profile_steps: Option<u64>,
 }
 
 /// Per-call statistics in nanoseconds.
@@ -136,7 +141,38 @@ fn kernel_svd(j: &Jacobian) -> JointVector {
     u.column(i).into()
 }
 
+/// The bench's RDMP: trained on the synthetic 2 s reach; its start and its goal.
+fn reach_rdmp(model: &RobotModel, cfg: &RdmpConfig) -> Result<(Rdmp, JointVector, Pose)> {
+    let demo = synthetic::reach(2.0, 0.01);
+    let mut gamma = vec![0.0; demo.len()];
+    null_space_coordinate(model, &demo, cfg.min_manipulability, &mut gamma)?;
+    let rdmp = Rdmp::train(model, &demo, &gamma, 0.01, &DmpParams::default())?;
+    let (first, last) = (demo[0], demo[demo.len() - 1]);
+    let goal = ArmKinematics::new(model, &JointVector::from(last)).tcp;
+    Ok((rdmp, JointVector::from(first), goal))
+}
+
+/// `--profile-steps N`: N steps of the reach in one loop, then the mean time per step.
+fn profile_steps(n: u64) -> Result<()> {
+    let (model, cfg) = (RobotModel::kmr_iiwa14(), RdmpConfig::default());
+    let (rdmp, q0, goal) = reach_rdmp(&model, &cfg)?;
+    let mut run = RdmpRun::new(&model, &rdmp, &q0, &goal, &cfg)?;
+    let start = Instant::now();
+    for _ in 0..n {
+        if run.finished() {
+            run = RdmpRun::new(&model, &rdmp, &q0, &goal, &cfg)?;
+        }
+        black_box(run.step(&model, &rdmp, &cfg)?);
+    }
+    let ns = start.elapsed().as_secs_f64() * 1e9 / n.max(1) as f64;
+    println!("{n} RDMP steps of the 2 s reach: {ns:.1} ns per step");
+    Ok(())
+}
+
 pub fn run(args: &Args) -> Result<()> {
+    if let Some(n) = args.profile_steps {
+        return profile_steps(n);
+    }
     let secs = args.seconds.max(0.05);
     let model = RobotModel::kmr_iiwa14();
     let cfg = RdmpConfig::default();
@@ -285,12 +321,7 @@ pub fn run(args: &Args) -> Result<()> {
     println!("  → {:.1}× faster", svdp.median / qr.median);
 
     println!("\nRDMP (Alg. 2), 2 s reach, Δt = 1 ms");
-    let demo = synthetic::reach(2.0, 0.01);
-    let mut gamma = vec![0.0; demo.len()];
-    null_space_coordinate(&model, &demo, cfg.min_manipulability, &mut gamma)?;
-    let rdmp = Rdmp::train(&model, &demo, &gamma, 0.01, &DmpParams::default())?;
-    let q0 = JointVector::from(demo[0]);
-    let goal = ArmKinematics::new(&model, &JointVector::from(*demo.last().unwrap())).tcp;
+    let (rdmp, q0, goal) = reach_rdmp(&model, &cfg)?;
     let fresh = || RdmpRun::new(&model, &rdmp, &q0, &goal, &cfg).expect("start");
     let mut run = fresh();
     let step = measure(secs, 100, || {
