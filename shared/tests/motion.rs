@@ -4,7 +4,7 @@
 
 use prf_shared::JointVector;
 use prf_shared::motion::{
-    CLASSES, Goal, GoalContext, PhysicalState, Sample, TaskLocation, Value, class,
+    CLASSES, Goal, GoalContext, MotionClass, PhysicalState, Sample, TaskLocation, Value, class,
 };
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::{Pose, pose_bits, pose_from_xyz_rpy};
@@ -30,14 +30,20 @@ fn templates_are_well_formed() {
     }
 }
 
+/// Pick, Move and Place.
+fn ptt_classes() -> (
+    &'static dyn MotionClass,
+    &'static dyn MotionClass,
+    &'static dyn MotionClass,
+) {
+    let c = |name| class(name).unwrap();
+    (c("Pick"), c("Move"), c("Place"))
+}
+
 #[test]
 fn pick_move_place_put_the_part_on_its_goal() {
     let model = RobotModel::kmr_iiwa14();
-    let (pick, mv, place) = (
-        class("Pick").unwrap(),
-        class("Move").unwrap(),
-        class("Place").unwrap(),
-    );
+    let (pick, mv, place) = ptt_classes();
     let part = pose_from_xyz_rpy([1.0, -1.2, 0.9], [0.0, 0.0, 0.4]);
     let grasp = pose_from_xyz_rpy([0.0, 0.0, 0.05], [std::f64::consts::PI, 0.0, 0.0]);
     let goal = pose_from_xyz_rpy([3.0, 1.5, 0.8], [0.0, 0.0, -1.0]);
@@ -129,11 +135,7 @@ fn pick_move_place_put_the_part_on_its_goal() {
 #[test]
 fn place_goals_are_the_same_bits_whichever_location_the_part_came_from() {
     let model = RobotModel::kmr_iiwa14();
-    let (pick, mv, place) = (
-        class("Pick").unwrap(),
-        class("Move").unwrap(),
-        class("Place").unwrap(),
-    );
+    let (pick, mv, place) = ptt_classes();
     let grasps = [pose_from_xyz_rpy(
         [0.01, -0.02, 0.05],
         [std::f64::consts::PI, 0.1, 0.3],
