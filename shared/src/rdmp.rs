@@ -483,45 +483,29 @@ impl RdmpRun {
         cfg: &RdmpConfig,
         observe: impl FnOnce(&ArmKinematics),
     ) -> Result<RdmpStep, RdmpError> {
-        let k = self.phase.step;
         if self.phase.finished() {
             return Err(RdmpError::Finished);
-        }
-        let kin = ArmKinematics::new(model, &self.q);
-        observe(&kin);
-        let qr = JacobianQr::new(&kin.jacobian(model));
-        let manipulability = qr.manipulability();
-        if !(manipulability >= cfg.min_manipulability) {
-            return Err(RdmpError::Singular {
-                step: k,
-                manipulability,
-            });
         }
         // The DMPs step in place; a refused step puts back what they moved (`Moved`), so it
         // leaves the run unchanged without copying the states in and out on every step.
         let moved = Moved::of(self);
-        let result = self.advance(model, rdmp, cfg, &kin, &qr, manipulability);
+        let dmp = self.dmps(rdmp, cfg);
+        let kin = ArmKinematics::new(model, &self.q);
+        observe(&kin);
+        let result = self.advance(model, cfg, &kin, &dmp);
         if result.is_err() {
             moved.put_back(self);
         }
         result
     }
 
-    /// Step's work after the QR: the DMPs' Heun steps, the joint velocity (Alg. 2 line 7),
-    /// and the checks; commits q, γ's measurement and the phase only on success.
+    /// The DMPs' Heun steps (Alg. 2, lines 14–21): they do not depend on q, so they come
+    /// before the kinematics and the processor overlaps their dependency chains with the
+    /// previous step's solve and this step's QR.
     #[inline(always)]
-    fn advance(
-        &mut self,
-        model: &RobotModel,
-        rdmp: &Rdmp,
-        cfg: &RdmpConfig,
-        kin: &ArmKinematics,
-        qr: &JacobianQr,
-        manipulability: f64,
-    ) -> Result<RdmpStep, RdmpError> {
-        let k = self.phase.step;
-        let (e_p, e_r) = pose_error(&self.dmp_pose(), &kin.tcp);
-        let gamma_dmp = self.gamma.y[0];
+    fn dmps(&mut self, rdmp: &Rdmp, cfg: &RdmpConfig) -> DmpVelocities {
+        let pose = self.dmp_pose();
+        let gamma = self.gamma.y[0];
         let (pp, rp, gp) = (&rdmp.position, &rdmp.rotation, &rdmp.gamma);
         let (phase, ahead) = (&self.phase, &mut self.ahead);
         let v = self
@@ -533,13 +517,42 @@ impl RdmpRun {
         let g = self
             .gamma
             .step(&gp.params, &gp.forcing, gp.tau, cfg.dt, phase, &mut ahead.2);
-        let twist = join(&(v + e_p * cfg.gain), &(w + e_r * cfg.gain));
+        DmpVelocities {
+            pose,
+            gamma,
+            v,
+            w,
+            g: g[0],
+        }
+    }
+
+    /// Step's work after the DMPs: the QR, the joint velocity (Alg. 2 line 7) and the checks;
+    /// commits q, γ's measurement and the phase only on success.
+    #[inline(always)]
+    fn advance(
+        &mut self,
+        model: &RobotModel,
+        cfg: &RdmpConfig,
+        kin: &ArmKinematics,
+        dmp: &DmpVelocities,
+    ) -> Result<RdmpStep, RdmpError> {
+        let k = self.phase.step;
+        let qr = JacobianQr::new(&kin.jacobian(model));
+        let manipulability = qr.manipulability();
+        if !(manipulability >= cfg.min_manipulability) {
+            return Err(RdmpError::Singular {
+                step: k,
+                manipulability,
+            });
+        }
+        let (e_p, e_r) = pose_error(&dmp.pose, &kin.tcp);
+        let twist = join(&(dmp.v + e_p * cfg.gain), &(dmp.w + e_r * cfg.gain));
         let (ker, pinv) = qr.kernel_and_pinv(&twist);
         let mut gamma_measured = self.gamma_measured;
         if let Some((m0, q0)) = self.previous {
             gamma_measured += gamma_increment(&m0, &ker.direction, &q0, &self.q);
         }
-        let gamma_rate = g[0] + cfg.gain * (gamma_dmp - gamma_measured);
+        let gamma_rate = dmp.g + cfg.gain * (dmp.gamma - gamma_measured);
         let qd = pinv.ok_or(RdmpError::Singular {
             step: k,
             manipulability,
@@ -563,11 +576,21 @@ impl RdmpRun {
             step: k + 1,
             q,
             qd,
-            gamma_dmp,
+            gamma_dmp: dmp.gamma,
             gamma_measured,
             manipulability: ker.manipulability,
         })
     }
+}
+
+/// One step's DMP outputs: the DMP pose and γ it stepped from, and the mean velocities over
+/// the step (ṗ, ω, γ̇).
+struct DmpVelocities {
+    pose: Pose,
+    gamma: f64,
+    v: Vector3<f64>,
+    w: Vector3<f64>,
+    g: f64,
 }
 
 /// What a step's DMPs move (positions, velocities, orientation and the unwrapping reference):
