@@ -48,14 +48,67 @@ impl AffordanceSet {
 pub const QUANTUM: f64 = 1e-6;
 
 /// `p` with its translation and quaternion rounded to [`QUANTUM`] (the quaternion then
-/// normalized).
+/// normalized), the quaternion's sign chosen: q and −q are one rotation, and of the two the
+/// one whose first non-zero component (w, i, j, k) is positive is kept. [`pose_to_array`]
+/// makes w ≥ 0, which leaves the sign of a half turn (w rounded to 0) to rounding.
 pub fn quantized(p: &Pose) -> Pose {
     // + 0.0: −0 and +0 are one value.
-    pose_from_array(pose_to_array(p).map(|v| (v / QUANTUM).round() * QUANTUM + 0.0)).unwrap_or(*p)
+    let mut a = pose_to_array(p).map(|v| (v / QUANTUM).round() * QUANTUM + 0.0);
+    if a[3..].iter().find(|v| **v != 0.0).is_some_and(|v| *v < 0.0) {
+        for v in &mut a[3..] {
+            *v = -*v + 0.0;
+        }
+    }
+    pose_from_array(a).unwrap_or(*p)
 }
 
 /// True if `a` and `b` are equal within the tolerances.
 pub fn same(a: &Pose, b: &Pose) -> bool {
     let d = a.inverse() * b;
     d.translation.vector.norm() < TRANSLATION_TOL && log(&d.rotation).norm() < ROTATION_TOL
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+    use prf_shared::se3::pose_bits;
+
+    fn pose(w: f64, i: f64, j: f64, k: f64) -> Pose {
+        Isometry3::from_parts(
+            Translation3::new(0.0, 0.0, 0.1),
+            UnitQuaternion::from_quaternion(Quaternion::new(w, i, j, k)),
+        )
+    }
+
+    /// A half turn reached from either side of w = 0, or as −q, is one learned pose, bit for
+    /// bit (the example's "top" grasps are half turns about x): the order programs come in
+    /// does not choose its sign.
+    #[test]
+    fn a_half_turn_is_quantized_to_one_sign() {
+        for (i, j, k) in [
+            (1.0, 0.0, 0.0),
+            (0.0, -1.0, 0.0),
+            (0.6, 0.0, -0.8),
+            (0.0, 0.0, 1.0),
+        ] {
+            let a = quantized(&pose(1e-9, i, j, k));
+            assert_eq!(pose_bits(&a), pose_bits(&quantized(&pose(-1e-9, i, j, k))));
+            assert_eq!(pose_bits(&a), pose_bits(&quantized(&pose(0.0, -i, -j, -k))));
+            let first = [a.rotation.i, a.rotation.j, a.rotation.k]
+                .into_iter()
+                .find(|v| *v != 0.0);
+            assert!(
+                a.rotation.w == 0.0 && first.is_some_and(|v| v > 0.0),
+                "{a:?}"
+            );
+        }
+        // Not a half turn: w > 0 already chooses the sign, as before.
+        let q = quantized(&pose(0.5, -0.5, 0.5, -0.5));
+        assert_eq!(
+            pose_bits(&q),
+            pose_bits(&quantized(&pose(-0.5, 0.5, -0.5, 0.5)))
+        );
+        assert!(q.rotation.w > 0.0 && q.rotation.i < 0.0);
+    }
 }
