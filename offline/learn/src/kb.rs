@@ -413,8 +413,17 @@ pub(crate) trait Record: Sized {
     fn get(b: &[u8]) -> Self;
 }
 
-fn f64_at(b: &[u8], i: usize) -> f64 {
-    f64::from_le_bytes(core::array::from_fn(|k| b[8 * i + k]))
+/// The first `N` words of `b` as little-endian numbers (`from` of each `W`-byte word; zeros
+/// if `b` is shorter), tested once for length: a record's fields then decode as plain loads,
+/// without a bounds check per byte.
+fn words<const N: usize, const W: usize, T: Default + Copy>(
+    b: &[u8],
+    from: fn([u8; W]) -> T,
+) -> [T; N] {
+    match b.as_chunks::<W>().0.first_chunk::<N>() {
+        Some(w) => w.map(from),
+        None => [T::default(); N],
+    }
 }
 
 /// Writes `values` into `out` as little-endian f64s.
@@ -432,9 +441,10 @@ impl Record for crate::workspace::SphereSample {
         put_f64s(out, self.centre.iter().chain([&self.radius]));
     }
     fn get(b: &[u8]) -> Self {
+        let [x, y, z, radius] = words(b, f64::from_le_bytes);
         crate::workspace::SphereSample {
-            centre: Vector3::new(f64_at(b, 0), f64_at(b, 1), f64_at(b, 2)),
-            radius: f64_at(b, 3),
+            centre: Vector3::new(x, y, z),
+            radius,
         }
     }
 }
@@ -446,9 +456,10 @@ impl Record for crate::workspace::PathSphere {
         out[24] = self.sphere;
     }
     fn get(b: &[u8]) -> Self {
+        let [x, y, z] = words(b, f64::from_le_bytes);
         crate::workspace::PathSphere {
-            centre: Vector3::new(f64_at(b, 0), f64_at(b, 1), f64_at(b, 2)),
-            sphere: b[24],
+            centre: Vector3::new(x, y, z),
+            sphere: b.get(24).copied().unwrap_or_default(),
         }
     }
 }
@@ -462,8 +473,8 @@ impl Record for (i32, i32, i32, u8) {
         out[12] = self.3;
     }
     fn get(b: &[u8]) -> Self {
-        let i = |k: usize| i32::from_le_bytes(core::array::from_fn(|n| b[4 * k + n]));
-        (i(0), i(1), i(2), b[12])
+        let [x, y, z] = words(b, i32::from_le_bytes);
+        (x, y, z, b.get(12).copied().unwrap_or_default())
     }
 }
 
@@ -473,7 +484,8 @@ impl Record for f64 {
         out.copy_from_slice(&self.to_le_bytes());
     }
     fn get(b: &[u8]) -> Self {
-        f64_at(b, 0)
+        let [v] = words(b, f64::from_le_bytes);
+        v
     }
 }
 
@@ -483,7 +495,8 @@ impl Record for u32 {
         out.copy_from_slice(&self.to_le_bytes());
     }
     fn get(b: &[u8]) -> Self {
-        u32::from_le_bytes(core::array::from_fn(|k| b[k]))
+        let [v] = words(b, u32::from_le_bytes);
+        v
     }
 }
 

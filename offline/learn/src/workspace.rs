@@ -27,6 +27,7 @@ use prf_shared::field::{
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
+use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 use std::collections::HashSet;
 
@@ -270,7 +271,7 @@ impl Sweep {
             seen: {
                 // Sorted and unique as written; a file that is not gets its set restored.
                 let mut seen = s.seen;
-                if !seen.is_sorted_by(|a, b| a < b) {
+                if !seen.par_windows(2).all(|w| w[0] < w[1]) {
                     seen.sort_unstable();
                     seen.dedup();
                 }
