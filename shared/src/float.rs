@@ -3,11 +3,10 @@
 //! IEEE 754 requires the square root to be correctly rounded, so every conforming
 //! implementation gives the same bits for a non-NaN result. `libm::sqrt` uses the x86-64
 //! instruction (in an encoding of its own: see [`sqrt`]), but on 32-bit ARM it is a software
-//! routine even where the FPU has one: the
-//! Cortex-M7's double-precision unit computes it in one `vsqrt.f64`, which is used there
-//! (rustc reports that unit as `target_feature = "vfp2"`: with `target-cpu=cortex-m7`, not
-//! for the single-precision Cortex-M4). Rounding to an integer is exact, so the FPU's
-//! `vrinta.f64` (FPv5) gives `libm::round`'s bits too.
+//! routine even where the FPU has one: the Cortex-M7's double-precision unit computes it in
+//! one `vsqrt.f64`, which is used there (rustc reports that unit as `target_feature = "vfp2"`:
+//! with `target-cpu=cortex-m7`, not for the single-precision Cortex-M4). Rounding to an
+//! integer is exact, so the FPU's `vrinta.f64` (FPv5) gives `libm::round`'s bits too.
 
 use nalgebra::Vector3;
 
@@ -28,8 +27,7 @@ pub fn sqrt(x: f64) -> f64 {
     }
     #[cfg(target_arch = "x86_64")]
     {
-        // SSE2's `sqrtsd`, chosen by the compiler (VEX-encoded where AVX is enabled; libm's
-        // inline assembly is always the legacy encoding, which stalls beside AVX code).
+        // SSE2's `sqrtsd`, encoded by the compiler (with VEX where AVX is enabled).
         use core::arch::x86_64::{_mm_cvtsd_f64, _mm_set_sd, _mm_sqrt_pd};
         // SAFETY: SSE2 is part of every x86-64 CPU (the target's baseline); the intrinsics
         // only compute on registers.

@@ -242,8 +242,8 @@ impl<'a> Decide<'a> {
     /// Calls `visit` with each cell (index) the margin ball of `s` touches: those of its box's
     /// corners (per axis the cell of the lowest and of the highest corner, and every cell
     /// between), at most 8. A visitor, not a returned array of them: returned, the array went
-    /// through the stack and its reads waited on its writes (finding the cells of the example
-    /// Table's 338 k spheres took 6.4–7.3 ms of `prf learn --add`'s recovery, now 4.8–5.3 ms).
+    /// through the stack and its reads waited on its writes (see the README's knowledge-base
+    /// figures).
     #[inline]
     fn cells_touched(&self, s: &SphereSample, mut visit: impl FnMut(usize)) {
         let m = Vector3::repeat(self.cfg.certify_margin);
