@@ -451,8 +451,9 @@ impl Cell {
 
     /// Why the controller can no longer be commanded, after `silent` ms without a joint state:
     /// it is dead or silent, or it stopped the arm itself (watchdog, refused setpoint).
-    /// After `dead_after_ms` of silence the liveness helper is asked once (`asked` holds the
-    /// question until a joint state comes); its answer "dead" stops the cell.
+    /// Its process having exited stops the cell at once ([`Liveness::exited`]); without a
+    /// pidfd, after `dead_after_ms` of silence the liveness helper is asked once (`asked`
+    /// holds the question until a joint state comes), and its answer "dead" stops the cell.
     /// Its stop flags count once it has `acknowledged` this session.
     fn controller_stop(
         &self,
@@ -461,7 +462,8 @@ impl Cell {
         acknowledged: bool,
     ) -> Option<String> {
         let js = &self.last;
-        let dead = silent >= self.cfg.silent_after_ms
+        let dead = self.liveness.exited()
+            || silent >= self.cfg.silent_after_ms
             || (silent >= self.cfg.dead_after_ms && {
                 let q = *asked.get_or_insert_with(|| self.liveness.ask());
                 self.liveness.answer(q) == Some(false)

@@ -66,6 +66,26 @@ pub fn controller_node_name(cell: &str) -> String {
 /// Whether a controller node of `cell` is alive. A process that died (even by SIGKILL) is
 /// seen as dead at once: iceoryx2 tracks node liveness with a lock the kernel releases.
 pub fn controller_alive(cell: &str) -> Result<bool> {
+    with_controller(cell, |_| ())
+}
+
+/// The process id of `cell`'s live controller, as its node records it (in the controller's
+/// PID namespace); `None` if no live controller node is listed or it has no process id.
+pub fn controller_pid(cell: &str) -> Result<Option<i32>> {
+    use iceoryx2::node::NodeView;
+    let mut pid = None;
+    with_controller(cell, |view| {
+        pid = view.id().pid::<Ipc>().ok().map(|p| p.value());
+    })?;
+    Ok(pid)
+}
+
+/// Calls `found` with `cell`'s live controller node if iceoryx2 lists one; says whether it
+/// did. Listing reads a directory and allocates: not for the 1 kHz loop.
+fn with_controller(
+    cell: &str,
+    mut found: impl FnMut(&iceoryx2::node::AliveNodeView<Ipc>),
+) -> Result<bool> {
     use iceoryx2::node::NodeView;
     let want = controller_node_name(cell);
     let mut alive = false;
@@ -76,6 +96,7 @@ pub fn controller_alive(cell: &str) -> Result<bool> {
                 .as_ref()
                 .is_some_and(|d| d.name().as_str() == want)
         {
+            found(view);
             alive = true;
             return CallbackProgression::Stop;
         }
