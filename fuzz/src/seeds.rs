@@ -83,7 +83,7 @@ pub fn all(dataset: &Path) -> anyhow::Result<Vec<(&'static str, String, Vec<u8>)
     let saved = learner.save()?;
     out.push(("kb", "empty.kb".into(), saved.clone()));
     // The same with an (empty) addition after the base, so that mutations reach the additions.
-    let appended = [saved, learner.addition(&[])].concat();
+    let appended = [saved, learner.addition(&[]).to_vec()].concat();
     out.push(("kb", "empty-addition.kb".into(), appended));
     for (kind, name, text) in [
         (0u8, "urdf.bin", EXAMPLE_URDF),

@@ -94,7 +94,7 @@ fn appended_additions_load_as_the_learner_that_appended_them() {
         let (k, lessons) =
             learn_lessons_into(&mut writer, &ds.demonstrations[range], &|_| {}).expect("learn");
         starts.push(file.len());
-        file.extend(writer.addition(&lessons));
+        file.extend(writer.addition(&lessons).to_vec());
         let written = writer.save().unwrap();
         let mut reader = Learner::load(&file).expect("load with additions");
         assert!(

@@ -53,11 +53,11 @@ pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> io::Result<()> {
     persist(tmp, path)
 }
 
-/// Appends `bytes` to the file at `path`, which must still be `len` bytes long (as read), and
-/// syncs it. A failed write is undone by cutting the file back to `len` bytes; a process killed
-/// mid-append leaves a cut-short tail, which a reader of an append-only format (a knowledge
-/// base's additions) detects by its length and CRC and reports.
-pub fn append(path: &Path, len: u64, bytes: &[u8]) -> io::Result<()> {
+/// Appends `parts`, in order, to the file at `path`, which must still be `len` bytes long (as
+/// read), and syncs it. A failed write is undone by cutting the file back to `len` bytes; a
+/// process killed mid-append leaves a cut-short tail, which a reader of an append-only format
+/// (a knowledge base's additions) detects by its length and CRC and reports.
+pub fn append(path: &Path, len: u64, parts: &[&[u8]]) -> io::Result<()> {
     let mut f = std::fs::OpenOptions::new().append(true).open(path)?;
     let now = f.metadata()?.len();
     if now != len {
@@ -66,7 +66,10 @@ pub fn append(path: &Path, len: u64, bytes: &[u8]) -> io::Result<()> {
             path.display()
         )));
     }
-    let written = f.write_all(bytes).and_then(|()| f.sync_data());
+    let written = parts
+        .iter()
+        .try_for_each(|b| f.write_all(b))
+        .and_then(|()| f.sync_data());
     if written.is_err() {
         // Best effort: the error reported is the write's.
         let _ = f.set_len(len).and_then(|()| f.sync_data());

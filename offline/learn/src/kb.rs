@@ -111,33 +111,39 @@ pub(crate) struct LearnerState {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub(crate) struct AdditionState {
     pub lessons: Vec<LessonsState>,
-    pub rebuilt: Vec<(
-        usize,
-        Option<crate::workspace::LearnedField>,
-        Option<SplatState>,
-    )>,
+    pub rebuilt: Vec<Rebuilt>,
 }
 
-impl AdditionState {
-    /// Bytes enough for the encoding in most cases: its long arrays' bytes and 64 KiB for
-    /// the rest (a capacity reserved, not touched: its unused pages cost nothing).
-    fn size_bound(&self) -> usize {
-        let lessons = self.lessons.iter().flat_map(|l| &l.lessons).map(|l| {
-            let sweep = l.sweep.as_ref().map_or(0, |p| p.0.spheres.len());
-            let arm = l
-                .arm
+/// A location type rebuilt by an addition: its index, field and splat.
+pub(crate) type Rebuilt = (
+    usize,
+    Option<crate::workspace::LearnedField>,
+    Option<SplatState>,
+);
+
+/// Bytes enough for most encodings of these lessons: their swept spheres' and paths' bytes
+/// and 64 KiB for the rest (a capacity reserved, not touched: its unused pages cost nothing).
+fn lessons_bound(lessons: &[LessonsState]) -> usize {
+    let long = lessons.iter().flat_map(|l| &l.lessons).map(|l| {
+        let sweep = l.sweep.as_ref().map_or(0, |p| p.0.spheres.len());
+        let arm = l
+            .arm
+            .as_ref()
+            .map_or(0, |a| a.path.len() * 56 + a.rdmp.weights.len() * 8);
+        sweep * <crate::workspace::PathSphere as Record>::SIZE + arm
+    });
+    long.sum::<usize>() + (64 << 10)
+}
+
+/// [`lessons_bound`] for rebuilt fields and their splats.
+fn rebuilt_bound(rebuilt: &[Rebuilt]) -> usize {
+    let long = rebuilt.iter().map(|(_, field, splat)| {
+        field.as_ref().map_or(0, |f| f.bytes())
+            + splat
                 .as_ref()
-                .map_or(0, |a| a.path.len() * 56 + a.rdmp.weights.len() * 8);
-            sweep * <crate::workspace::PathSphere as Record>::SIZE + arm
-        });
-        let rebuilt = self.rebuilt.iter().map(|(_, field, splat)| {
-            field.as_ref().map_or(0, |f| f.bytes())
-                + splat
-                    .as_ref()
-                    .map_or(0, |s| s.value.len() * 8 + s.feature.len() * 4)
-        });
-        lessons.chain(rebuilt).sum::<usize>() + FRAME + (64 << 10)
-    }
+                .map_or(0, |s| s.value.len() * 8 + s.feature.len() * 4)
+    });
+    long.sum::<usize>() + (64 << 10)
 }
 
 /// A [`crate::learn::Lessons`].
@@ -585,23 +591,71 @@ pub(crate) fn section(sweep: &SweepState) -> Vec<u8> {
     framed(sweep)
 }
 
-/// An addition's record, to append to a knowledge base ([`AdditionState`]).
-///
-/// Its buffer is reserved for the long arrays at once ([`AdditionState::size_bound`]): grown
-/// by doubling instead, a 4 MB addition was copied through buffers of 8 MB in all, each page
-/// of them faulted in (6.0 → 4.3 ms, `prf learn --add` of one program of the example cell).
-pub(crate) fn encode_addition(a: &AdditionState) -> Vec<u8> {
-    framed_in(a, Vec::with_capacity(a.size_bound()))
+/// The lessons of an addition ([`AdditionState::lessons`]) in postcard: the record's first
+/// field, encoded on its own so that `prf learn --add` can encode it while the fields are
+/// rebuilt. Its buffer is reserved for the long arrays at once ([`lessons_bound`]).
+pub struct LessonsPart(Vec<u8>);
+
+/// [`LessonsPart`] of `lessons`.
+pub(crate) fn encode_lessons(lessons: &[LessonsState]) -> LessonsPart {
+    let out = Vec::with_capacity(lessons_bound(lessons));
+    LessonsPart(postcard::to_extend(lessons, out).unwrap_or_default())
+}
+
+/// An addition's record, to append to a knowledge base, in three parts: the frame (length
+/// and CRC-32 of the rest), the lessons ([`LessonsPart`]) and the rebuilt types in postcard.
+/// Postcard encodes a struct as its fields in order, so the last two are the
+/// [`AdditionState`]'s encoding (test `an_addition_in_parts_is_the_additions_encoding`);
+/// kept apart, neither is copied into the other.
+pub struct AdditionRecord {
+    frame: [u8; FRAME],
+    lessons: Vec<u8>,
+    rebuilt: Vec<u8>,
+}
+
+impl AdditionRecord {
+    /// Bytes in all.
+    pub fn len(&self) -> usize {
+        FRAME + self.lessons.len() + self.rebuilt.len()
+    }
+
+    /// Never: a record has at least its frame.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The parts, in file order.
+    pub fn parts(&self) -> [&[u8]; 3] {
+        [&self.frame, &self.lessons, &self.rebuilt]
+    }
+
+    /// The record in one buffer.
+    pub fn to_vec(&self) -> Vec<u8> {
+        self.parts().concat()
+    }
+}
+
+/// The addition record of `lessons` and the types `rebuilt`.
+pub(crate) fn encode_addition(lessons: LessonsPart, rebuilt: &[Rebuilt]) -> AdditionRecord {
+    let out = Vec::with_capacity(rebuilt_bound(rebuilt));
+    let rebuilt = postcard::to_extend(rebuilt, out).unwrap_or_default();
+    let mut crc = crc32fast::Hasher::new();
+    crc.update(&lessons.0);
+    crc.update(&rebuilt);
+    let mut frame = [0; FRAME];
+    let payload = lessons.0.len() + rebuilt.len();
+    frame[..8].copy_from_slice(&(payload as u64).to_le_bytes());
+    frame[8..].copy_from_slice(&crc.finalize().to_le_bytes());
+    AdditionRecord {
+        frame,
+        lessons: lessons.0,
+        rebuilt,
+    }
 }
 
 /// `value` in postcard after its length (u64 LE) and CRC-32 (u32 LE).
 fn framed<T: Serialize>(value: &T) -> Vec<u8> {
-    framed_in(value, Vec::new())
-}
-
-/// [`framed`], appended to `out` (empty, maybe with capacity reserved).
-fn framed_in<T: Serialize>(value: &T, mut out: Vec<u8>) -> Vec<u8> {
-    out.extend_from_slice(&[0; FRAME]);
+    let mut out = Vec::from([0; FRAME]);
     out = postcard::to_extend(value, out).unwrap_or_default();
     let payload = out.len().saturating_sub(FRAME);
     let crc = crc32(out.get(FRAME..).unwrap_or_default());
@@ -811,5 +865,53 @@ mod tests {
         }
         // The check value of CRC-32/ISO-HDLC.
         assert_eq!(super::crc32(b"123456789"), 0xcbf4_3926);
+    }
+
+    /// The record `prf learn --add` appends in parts is the framed encoding of the addition
+    /// that loading decodes.
+    #[test]
+    fn an_addition_in_parts_is_the_additions_encoding() {
+        use super::*;
+        use crate::workspace::{PathSphere, SweptPath};
+        let spheres = (0..1000)
+            .map(|i| PathSphere {
+                centre: Vector3::new(i as f64 * 1e-3, -0.5, 1.0 / (1.0 + i as f64)),
+                sphere: (i % 7) as u8,
+            })
+            .collect();
+        let lesson = LessonState {
+            class: "reach".into(),
+            location_type: Some(1),
+            part_type: 0,
+            affordance: Some((2, [0.1, 0.2, 0.3, 1.0, 0.0, 0.0, 0.0])),
+            sweep: Some(PathSpheres(std::sync::Arc::new(SweptPath::new(spheres)))),
+            arm: None,
+        };
+        let state = AdditionState {
+            lessons: vec![LessonsState {
+                demonstration: "d063".into(),
+                fingerprint: 0x1234_5678,
+                lessons: vec![lesson.clone(), lesson],
+            }],
+            rebuilt: vec![(
+                1,
+                None,
+                Some(SplatState {
+                    origin: [0.0, -1.0, 0.5],
+                    dims: [4, 4, 4],
+                    grid: [0.05; 3],
+                    value: (0..64).map(|i| i as f64 * 0.01).collect(),
+                    feature: (0..64)
+                        .map(|i| if i % 3 == 0 { u32::MAX } else { i })
+                        .collect(),
+                    done: 64,
+                }),
+            )],
+        };
+        let parts = encode_addition(encode_lessons(&state.lessons), &state.rebuilt);
+        assert_eq!(parts.to_vec(), framed(&state));
+        assert_eq!(parts.len(), framed(&state).len());
+        let payload = &parts.to_vec()[FRAME..];
+        assert_eq!(postcard::from_bytes::<AdditionState>(payload), Ok(state));
     }
 }

@@ -17,6 +17,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod journal;
+pub use journal::lessons_part;
 mod stored;
 
 pub use stored::KbFile;
@@ -396,6 +397,18 @@ pub fn learn_lessons_into(
     demos: &[Demonstration],
     progress: OnProgress<'_>,
 ) -> Result<(Knowledge, Vec<Lessons>), LearnError> {
+    learn_lessons_into_with(learner, demos, progress, |_| ()).map(|(k, l, ())| (k, l))
+}
+
+/// [`learn_lessons_into`], running `beside` on the lessons while the fields they touch are
+/// rebuilt (on whichever core is free) and giving its result too: `prf learn --add` encodes
+/// their part of the addition record there ([`lessons_part`]).
+pub fn learn_lessons_into_with<R: Send>(
+    learner: &mut Learner,
+    demos: &[Demonstration],
+    progress: OnProgress<'_>,
+    beside: impl FnOnce(&[Lessons]) -> R + Send,
+) -> Result<(Knowledge, Vec<Lessons>, R), LearnError> {
     progress(Progress::Total(
         (demos.len() + learner.location_kinds.len()) as u64,
     ));
@@ -414,16 +427,22 @@ pub fn learn_lessons_into(
     }
     let t_segment = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let mut knowledge = learner.knowledge(&|p| {
-        if let Progress::Done(n) = p {
-            progress(Progress::Done(n))
-        }
-    })?;
+    let (knowledge, r) = rayon::join(
+        || {
+            learner.knowledge(&|p| {
+                if let Progress::Done(n) = p {
+                    progress(Progress::Done(n))
+                }
+            })
+        },
+        || beside(&per_demo),
+    );
+    let mut knowledge = knowledge?;
     knowledge.timings = vec![
         ("segment + train skills", t_segment),
         ("workspaces", t1.elapsed().as_secs_f64()),
     ];
-    Ok((knowledge, per_demo))
+    Ok((knowledge, per_demo, r))
 }
 
 /// Learn (Alg. 3) one demonstration at a time: the state after the demonstrations added so

@@ -5,7 +5,8 @@ use anyhow::Context;
 use prf_files::dataset::Dataset;
 use prf_files::robot;
 use prf_learn::learn::{
-    KbFile, Learner, fingerprint, learn_into, learn_lessons_into, skills_per_class,
+    KbFile, Learner, fingerprint, learn_into, learn_lessons_into_with, lessons_part,
+    skills_per_class,
 };
 use prf_learn::{LearnConfig, compile, report};
 use std::path::PathBuf;
@@ -169,7 +170,8 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
         }
     }
     let t1 = Instant::now();
-    let (k, lessons) = learn_lessons_into(&mut learner, &demos, &|_| {})
+    // The lessons' part of the addition is encoded while the fields are rebuilt.
+    let (k, lessons, part) = learn_lessons_into_with(&mut learner, &demos, &|_| {}, lessons_part)
         .with_context(|| format!("learning into {}", kb.display()))?;
     let t_learn = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
@@ -178,7 +180,7 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
     let t3 = Instant::now();
     prf_files::atomic::write(&a.output, &blob)
         .with_context(|| format!("writing {}", a.output.display()))?;
-    let kb_write = write_kb(kb, bytes, &mut learner, &lessons)
+    let kb_write = write_kb(kb, bytes, &mut learner, &lessons, part)
         .with_context(|| format!("writing {}", kb.display()))?;
     let t_write = t3.elapsed().as_secs_f64();
     if !a.quiet {
@@ -230,8 +232,9 @@ fn write_kb(
     read: &[u8],
     learner: &mut Learner,
     lessons: &[prf_learn::learn::Lessons],
+    part: prf_learn::kb::LessonsPart,
 ) -> anyhow::Result<String> {
-    let record = learner.addition(lessons);
+    let record = learner.addition_with(lessons, part);
     let mb = |n: usize| n as f64 / 1e6;
     if let Some(why) = prf_learn::kb::rewrite_instead(read, record.len()) {
         let whole = learner.save()?;
@@ -241,7 +244,7 @@ fn write_kb(
             mb(whole.len())
         ));
     }
-    prf_files::atomic::append(kb, read.len() as u64, &record)?;
+    prf_files::atomic::append(kb, read.len() as u64, &record.parts())?;
     let base = prf_learn::kb::base_len(read).unwrap_or(0);
     Ok(format!(
         "appended {:.2} MB (additions now {:.1} MB after a {:.1} MB base)",

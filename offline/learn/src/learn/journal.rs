@@ -4,11 +4,18 @@
 
 use super::{Learner, Lesson, Lessons, within_100_m};
 use crate::kb::{
-    AdditionState, ArmState, FRAMES, KbError, LessonState, LessonsState, PathSpheres, RdmpState,
-    encode_addition, pose_of, pose_state,
+    AdditionRecord, AdditionState, ArmState, FRAMES, KbError, LessonState, LessonsPart,
+    LessonsState, PathSpheres, RdmpState, Rebuilt, encode_addition, encode_lessons, pose_of,
+    pose_state,
 };
 use crate::workspace::PathSphere;
 use prf_shared::motion::CLASSES;
+
+/// The lessons' part of the addition record of `lessons` ([`Learner::addition_with`]). It
+/// depends on nothing else, so `prf learn --add` encodes it while the fields are rebuilt.
+pub fn lessons_part(lessons: &[Lessons]) -> LessonsPart {
+    encode_lessons(&lessons.iter().map(lessons_state).collect::<Vec<_>>())
+}
 
 impl Learner {
     /// The addition record of `lessons`, each already [`Learner::add`]ed, to append to the
@@ -16,23 +23,27 @@ impl Learner {
     /// for every location type they swept whose queue [`Learner::knowledge`] has since
     /// emptied, the field and splat of that build; a type still queued is rebuilt after
     /// loading, as it would be here.
-    pub fn addition(&self, lessons: &[Lessons]) -> Vec<u8> {
+    pub fn addition(&self, lessons: &[Lessons]) -> AdditionRecord {
+        self.addition_with(lessons, lessons_part(lessons))
+    }
+
+    /// [`Learner::addition`] with the lessons' part encoded already ([`lessons_part`] of the
+    /// same `lessons`).
+    pub fn addition_with(&self, lessons: &[Lessons], part: LessonsPart) -> AdditionRecord {
         let mut touched: Vec<usize> = lessons.iter().flat_map(Lessons::swept_types).collect();
         touched.sort_unstable();
         touched.dedup();
-        encode_addition(&AdditionState {
-            lessons: lessons.iter().map(lessons_state).collect(),
-            rebuilt: touched
-                .into_iter()
-                .filter(|&t| self.pending[t].is_empty())
-                .map(|t| {
-                    let field = self.location_types[t].field.clone();
-                    // A sweep left in the file has not been rebuilt since: no splat (a cache).
-                    let splat = self.sweeps[t].ready().and_then(|s| s.splat_state());
-                    (t, field, splat)
-                })
-                .collect(),
-        })
+        let rebuilt: Vec<Rebuilt> = touched
+            .into_iter()
+            .filter(|&t| self.pending[t].is_empty())
+            .map(|t| {
+                let field = self.location_types[t].field.clone();
+                // A sweep left in the file has not been rebuilt since: no splat (a cache).
+                let splat = self.sweeps[t].ready().and_then(|s| s.splat_state());
+                (t, field, splat)
+            })
+            .collect();
+        encode_addition(part, &rebuilt)
     }
 
     /// Replays an addition: its lessons added in order, then each rebuilt type's queue moved
