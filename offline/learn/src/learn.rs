@@ -17,9 +17,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod journal;
-pub use journal::lessons_part;
 mod stored;
 
+pub use journal::lessons_part;
 pub use stored::KbFile;
 use stored::Slot;
 
