@@ -38,6 +38,14 @@ pub const HEADER: usize = 6 + 4 + 8 + 8 + 4;
 /// A sweep section's or an addition's length (u64 LE) and CRC-32 (u32 LE).
 const FRAME: usize = 8 + 4;
 
+/// The [`FRAME`] of a payload of `len` bytes whose CRC-32 is `crc`.
+fn frame_of(len: usize, crc: u32) -> [u8; FRAME] {
+    let mut frame = [0; FRAME];
+    frame[..8].copy_from_slice(&(len as u64).to_le_bytes());
+    frame[8..].copy_from_slice(&crc.to_le_bytes());
+    frame
+}
+
 /// Why a knowledge-base file cannot be read.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum KbError {
@@ -122,14 +130,14 @@ pub(crate) type Rebuilt = (
 );
 
 /// Bytes enough for most encodings of these lessons: their swept spheres' and paths' bytes
-/// and 64 KiB for the rest (a capacity reserved, not touched: its unused pages cost nothing).
+/// (postcard writes an f64 as its 8 bytes) and 64 KiB for the rest (a capacity reserved, not
+/// touched: its unused pages cost nothing).
 fn lessons_bound(lessons: &[LessonsState]) -> usize {
     let long = lessons.iter().flat_map(|l| &l.lessons).map(|l| {
         let sweep = l.sweep.as_ref().map_or(0, |p| p.0.spheres.len());
-        let arm = l
-            .arm
-            .as_ref()
-            .map_or(0, |a| a.path.len() * 56 + a.rdmp.weights.len() * 8);
+        let arm = l.arm.as_ref().map_or(0, |a| {
+            (a.path.len() * 7 + a.rdmp.weights.len()) * size_of::<f64>()
+        });
         sweep * <crate::workspace::PathSphere as Record>::SIZE + arm
     });
     long.sum::<usize>() + (64 << 10)
@@ -139,9 +147,9 @@ fn lessons_bound(lessons: &[LessonsState]) -> usize {
 fn rebuilt_bound(rebuilt: &[Rebuilt]) -> usize {
     let long = rebuilt.iter().map(|(_, field, splat)| {
         field.as_ref().map_or(0, |f| f.bytes())
-            + splat
-                .as_ref()
-                .map_or(0, |s| s.value.len() * 8 + s.feature.len() * 4)
+            + splat.as_ref().map_or(0, |s| {
+                s.value.len() * <f64 as Record>::SIZE + s.feature.len() * <u32 as Record>::SIZE
+            })
     });
     long.sum::<usize>() + (64 << 10)
 }
@@ -642,12 +650,8 @@ pub(crate) fn encode_addition(lessons: LessonsPart, rebuilt: &[Rebuilt]) -> Addi
     let mut crc = crc32fast::Hasher::new();
     crc.update(&lessons.0);
     crc.update(&rebuilt);
-    let mut frame = [0; FRAME];
-    let payload = lessons.0.len() + rebuilt.len();
-    frame[..8].copy_from_slice(&(payload as u64).to_le_bytes());
-    frame[8..].copy_from_slice(&crc.finalize().to_le_bytes());
     AdditionRecord {
-        frame,
+        frame: frame_of(lessons.0.len() + rebuilt.len(), crc.finalize()),
         lessons: lessons.0,
         rebuilt,
     }
@@ -660,8 +664,7 @@ fn framed<T: Serialize>(value: &T) -> Vec<u8> {
     let payload = out.len().saturating_sub(FRAME);
     let crc = crc32(out.get(FRAME..).unwrap_or_default());
     if let Some(h) = out.get_mut(..FRAME) {
-        h[..8].copy_from_slice(&(payload as u64).to_le_bytes());
-        h[8..].copy_from_slice(&crc.to_le_bytes());
+        h.copy_from_slice(&frame_of(payload, crc));
     }
     out
 }
@@ -709,9 +712,8 @@ pub fn seal(bytes: &[u8]) -> Vec<u8> {
     let mut at = HEADER + core;
     while out.len() - at >= FRAME {
         let len = (u64_at(&out, at).min((out.len() - at - FRAME) as u64)) as usize;
-        out[at..at + 8].copy_from_slice(&(len as u64).to_le_bytes());
         let crc = crc32(&out[at + FRAME..at + FRAME + len]);
-        out[at + 8..at + FRAME].copy_from_slice(&crc.to_le_bytes());
+        out[at..at + FRAME].copy_from_slice(&frame_of(len, crc));
         at += FRAME + len;
     }
     out
