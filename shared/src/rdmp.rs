@@ -527,7 +527,9 @@ impl RdmpRun {
     }
 
     /// Step's work after the DMPs: the QR, the joint velocity (Alg. 2 line 7) and the checks;
-    /// commits q, γ's measurement and the phase only on success.
+    /// commits q, γ's measurement and the phase only on success. The phase's next features,
+    /// φ(ζ_{k+2}), are computed right after the QR ([`Phase::prepare`]): independent of q, they
+    /// fill the time the QR's and the solve's dependency chains leave idle.
     #[inline(always)]
     fn advance(
         &mut self,
@@ -538,6 +540,7 @@ impl RdmpRun {
     ) -> Result<RdmpStep, RdmpError> {
         let k = self.phase.step;
         let qr = JacobianQr::new(&kin.jacobian(model));
+        self.phase.prepare();
         let manipulability = qr.manipulability();
         if !(manipulability >= cfg.min_manipulability) {
             return Err(RdmpError::Singular {
@@ -594,8 +597,9 @@ struct DmpVelocities {
 }
 
 /// What a step's DMPs move (positions, velocities, orientation and the unwrapping reference):
-/// kept before the step and put back when it is refused. The carried forcing values need not
-/// be: they name the step they belong to, and a retry at step k evaluates f(ζ_k) again.
+/// kept before the step and put back when it is refused, with the phase's φ(ζ_k)
+/// ([`Phase::unprepare`]). The carried forcing values need not be: they name the step they
+/// belong to, and a retry at step k evaluates f(ζ_k) again.
 #[derive(Clone, Copy)]
 struct Moved {
     y: Vector3<f64>,
@@ -627,6 +631,7 @@ impl Moved {
         (run.position.y, run.position.z) = (self.y, self.z);
         (run.rotation.r, run.rotation.eta, run.rotation.error) = (self.r, self.eta, self.error);
         (run.gamma.y, run.gamma.z) = (self.gamma, self.gamma_z);
+        run.phase.unprepare();
     }
 }
 

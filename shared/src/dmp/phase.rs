@@ -240,6 +240,8 @@ pub struct Phase {
     /// `now` instead of copying.
     features: [Features; 2],
     now: usize,
+    /// `features[now]` holds φ(ζ_{k+2}) instead of φ(ζ_k) ([`Phase::prepare`]).
+    prepared: bool,
 }
 
 impl Phase {
@@ -286,10 +288,11 @@ impl Phase {
             zeta_next: decay,
             features: [Features::ZERO; 2],
             now: 0,
+            prepared: false,
         })
     }
 
-    /// φ(ζ_k).
+    /// φ(ζ_k) (inside an RDMP step, once its DMPs have stepped: φ(ζ_{k+2}), [`Phase::prepare`]).
     pub fn current(&self) -> &Features {
         &self.features[self.now]
     }
@@ -299,16 +302,38 @@ impl Phase {
         &self.features[1 - self.now]
     }
 
-    /// Moves from step k to k+1: one basis evaluation.
+    /// Computes φ(ζ_{k+2}) ahead of [`Phase::advance`], over φ(ζ_k), which a step needs no
+    /// more once its DMPs have stepped: the RDMP step calls it while its QR's dependency chain
+    /// leaves the processor room. A step that is then refused calls [`Phase::unprepare`].
+    #[inline(always)]
+    pub(crate) fn prepare(&mut self) {
+        if !self.prepared {
+            let gate = self.gate(self.step + 2);
+            let zeta = self.zeta_next * self.decay;
+            gated_features(&self.basis, gate, zeta, &mut self.features[self.now]);
+            self.prepared = true;
+        }
+    }
+
+    /// Puts φ(ζ_k) back where [`Phase::prepare`] wrote φ(ζ_{k+2}) (for a step retried at k).
+    #[cold]
+    pub(crate) fn unprepare(&mut self) {
+        if self.prepared {
+            let gate = self.gate(self.step);
+            gated_features(&self.basis, gate, self.zeta, &mut self.features[self.now]);
+            self.prepared = false;
+        }
+    }
+
+    /// Moves from step k to k+1: one basis evaluation, the old φ(ζ_k) becoming φ(ζ_{k+2}),
+    /// unless [`Phase::prepare`] did it.
     pub fn advance(&mut self) {
+        self.prepare();
+        self.prepared = false;
         self.step += 1;
         self.zeta = self.zeta_next;
         self.zeta_next *= self.decay;
-        let gate = self.gate(self.step + 1);
-        // The old φ(ζ_k) becomes φ(ζ_{k+2}).
-        let stale = self.now;
-        self.now = 1 - stale;
-        gated_features(&self.basis, gate, self.zeta_next, &mut self.features[stale]);
+        self.now = 1 - self.now;
     }
 
     /// The weight of the forcing term at step `k`: 1 up to τ, then falling linearly to 0 over
@@ -347,7 +372,7 @@ impl Phase {
         self.zeta_next = zeta_next;
         let (now, then) = (self.gate(step), self.gate(step + 1));
         let [current, next] = &mut self.features;
-        self.now = 0;
+        (self.now, self.prepared) = (0, false);
         gated_features(&self.basis, now, zeta, current);
         gated_features(&self.basis, then, zeta_next, next);
     }
