@@ -30,6 +30,9 @@ cargo fmt --manifest-path fuzz/libfuzzer/Cargo.toml -- --check
 step "cargo clippy -D warnings"
 cargo clippy --workspace --all-targets --locked -q -- -D warnings
 
+step "cargo doc -D warnings (intra-doc links resolve, none to private items from public ones)"
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked -q
+
 step "no_std proof: prf-shared, prf-runtime and prf-ruckig for thumbv7em-none-eabihf (Cortex-M7)"
 # Debian's toolchain first in PATH for this command only; a separate target dir keeps its
 # artifacts apart from the rustup toolchain's.

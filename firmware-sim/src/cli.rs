@@ -10,8 +10,8 @@ use std::path::PathBuf;
 /// memory at 1 kHz and publishes the measured joint state.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Cell name; the services are prf/<cell>/setpoint, prf/<cell>/setpoint-ready and
-    /// prf/<cell>/joint-state.
+    /// Cell name; the services are `prf/<cell>/setpoint`, `prf/<cell>/setpoint-ready`
+    /// and `prf/<cell>/joint-state`.
     #[arg(long, default_value = "cell")]
     pub cell: String,
     /// Servo bandwidth, Hz.
@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(long, value_parser = parse_pose, default_value = "0,0,0", allow_hyphen_values = true)]
     pub base: [f64; 3],
     /// Log file (tracking error every 100 setpoints, sessions, faults); default
-    /// $TMPDIR/prf-firmware-sim-<cell>.log.
+    /// `$TMPDIR/prf-firmware-sim-<cell>.log`.
     #[arg(long)]
     pub log: Option<PathBuf>,
     /// Exit when the parent process exits.

@@ -563,8 +563,8 @@ impl std::fmt::Display for Summary {
 }
 
 /// Runs the controller until SIGINT/SIGTERM, a SHUTDOWN setpoint or (optionally) the loss of
-/// its parent process: a setpoint wakes it for [`Controller::on_setpoint`]; a period without
-/// one runs [`Controller::on_silence`].
+/// its parent process: a setpoint wakes it for `Controller::on_setpoint`; a period without
+/// one runs `Controller::on_silence`.
 pub fn run(cfg: &Config) -> Result<Summary> {
     let node = link::node(&link::controller_node_name(&cfg.cell))?;
     let ports = ControllerPorts::open(&node, &cfg.cell)?;

@@ -511,7 +511,7 @@ impl DistanceField for Field<'_> {
     }
 
     /// The two anchored tests inline (most lookups along a trajectory end there); the rest
-    /// in [`Field::lookup_from`].
+    /// in `Field::lookup_in` (inside the grid) and `Field::lookup_outside`.
     #[inline]
     fn distance_upto(&self, p: &Vector3<f64>, stop: f64, hint: &mut Hint) -> f64 {
         if self.anchored && hint.stop <= stop && (p - hint.anchor).norm_squared() < hint.slack2 {

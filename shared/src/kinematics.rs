@@ -22,7 +22,7 @@ impl ArmKinematics {
     ///
     /// Rot(a, θ) = [cos θ/2, a sin θ/2] with both from one `libm::sincos` (one range
     /// reduction; the same bits on the host and on the controller). About a z axis, as every
-    /// iiwa joint turns, the product with it is [`times_z_rotation`].
+    /// iiwa joint turns, the product with it is `times_z_rotation`.
     pub fn new(model: &RobotModel, q: &JointVector) -> Self {
         let mut kin = ArmKinematics {
             frames: [Pose::identity(); N_FRAMES],

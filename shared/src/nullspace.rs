@@ -46,7 +46,7 @@ pub struct JacobianQr {
 
 impl JacobianQr {
     /// The QR of Jᵀ: the six Householder steps unrolled for the 7 × 6 shape
-    /// ([`reflect`]); the same operations in the same order as [`JacobianQr::new_looped`].
+    /// (`reflect`); the same operations in the same order as [`JacobianQr::new_looped`].
     pub fn new(j: &Jacobian) -> Self {
         // a = Jᵀ, column-major by construction: a[c][row] is Jᵀ(row, c) = J(c, row).
         let mut a = [[0.0; 7]; 6];

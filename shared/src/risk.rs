@@ -51,7 +51,7 @@ impl RiskAccumulator {
     /// already shows sdf + r ≤ max(excess so far, 0) cannot change η(max), so the lookup
     /// stops there ([`DistanceField::distance_upto`]); a sphere still within the slack of its
     /// last settled lookup is not looked up at all (see [`Hint`]), and a sphere that cannot
-    /// have left that slack since ([`Travel`]) is not even placed. The risk is exact; the
+    /// have left that slack since (`Travel`) is not even placed. The risk is exact; the
     /// excess is exact once positive and otherwise an upper bound ≤ 0.
     pub fn add(
         &mut self,

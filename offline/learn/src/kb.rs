@@ -30,7 +30,7 @@ use std::ops::Range;
 /// The file's first bytes.
 pub const MAGIC: [u8; 6] = *b"PRF-KB";
 /// The layout this build writes and reads (2: the swept spheres, their keys and the splat as
-/// byte strings of [`Record`]s; 3: additions may follow the base; 4: each location type's sweep
+/// byte strings of `Record`s; 3: additions may follow the base; 4: each location type's sweep
 /// in a section of its own, after the core).
 pub const VERSION: u32 = 4;
 /// Magic, version, base length, core length, core CRC-32.
@@ -599,9 +599,9 @@ pub(crate) fn section(sweep: &SweepState) -> Vec<u8> {
     framed(sweep)
 }
 
-/// The lessons of an addition ([`AdditionState::lessons`]) in postcard: the record's first
+/// The lessons of an addition (`AdditionState::lessons`) in postcard: the record's first
 /// field, encoded on its own so that `prf learn --add` can encode it while the fields are
-/// rebuilt. Its buffer is reserved for the long arrays at once ([`lessons_bound`]).
+/// rebuilt. Its buffer is reserved for the long arrays at once (`lessons_bound`).
 pub struct LessonsPart(Vec<u8>);
 
 /// [`LessonsPart`] of `lessons`.
@@ -613,7 +613,7 @@ pub(crate) fn encode_lessons(lessons: &[LessonsState]) -> LessonsPart {
 /// An addition's record, to append to a knowledge base, in three parts: the frame (length
 /// and CRC-32 of the rest), the lessons ([`LessonsPart`]) and the rebuilt types in postcard.
 /// Postcard encodes a struct as its fields in order, so the last two are the
-/// [`AdditionState`]'s encoding (test `an_addition_in_parts_is_the_additions_encoding`);
+/// `AdditionState`'s encoding (test `an_addition_in_parts_is_the_additions_encoding`);
 /// kept apart, neither is copied into the other.
 pub struct AdditionRecord {
     frame: [u8; FRAME],

@@ -294,7 +294,7 @@ impl Sweep {
     }
 
     /// Adds the spheres of `paths` not seen yet, in their order: a sphere is new when no
-    /// earlier one (kept, or before it in `paths`) has its [`SeenKey`]. The paths' keys come
+    /// earlier one (kept, or before it in `paths`) has its `SeenKey`. The paths' keys come
     /// sorted ([`SweptPath`]): they are merged with each other and with the kept ones in
     /// sequential passes, instead of a hash lookup per sphere (a cache miss each, 0.2 µs).
     pub fn add_spheres(&mut self, model: &RobotModel, paths: &[&SweptPath]) {
@@ -362,7 +362,7 @@ struct Fresh {
 }
 
 /// The swept spheres of one instance (from [`Sweep::path_spheres`]) and, sorted, each of
-/// their [`SeenKey`]s with the index of its first sphere: the de-duplication within the path,
+/// their `SeenKey`s with the index of its first sphere: the de-duplication within the path,
 /// done once with the demonstration's lessons rather than at each [`Sweep::add_spheres`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweptPath {

@@ -4,7 +4,7 @@
 use indicatif::{ProgressBar, ProgressStyle};
 use prf_files::Progress;
 
-/// A progress bar "WHAT [bar] pos/len UNIT, elapsed", hidden when `quiet`.
+/// A progress bar `WHAT [bar] pos/len UNIT, elapsed`, hidden when `quiet`.
 pub struct Bar(ProgressBar);
 
 impl Bar {

@@ -20,7 +20,7 @@ pub struct Args {
     pub world: WorldArgs,
     #[command(flatten)]
     pub pacing: PacingArgs,
-    /// Cell name: the iceoryx2 services are prf/<cell>/…; must match firmware-sim's --cell.
+    /// Cell name: the iceoryx2 services are `prf/<cell>/…`; must match firmware-sim's --cell.
     #[arg(long, default_value = "cell")]
     pub cell: String,
     /// Start firmware-sim for this run (as `prf firmware-sim`), with the platform at home.

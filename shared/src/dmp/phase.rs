@@ -119,7 +119,7 @@ impl Basis {
     }
 
     /// [`Basis::features`] written over `out` in place (no features temporary to copy),
-    /// testing only the [`Basis::candidates`] at ζ.
+    /// testing only the `Basis::candidates` at ζ.
     pub fn features_into(&self, zeta: f64, out: &mut Features) {
         self.features_among(self.candidates(zeta), zeta, out);
     }
@@ -292,7 +292,7 @@ impl Phase {
         })
     }
 
-    /// φ(ζ_k) (inside an RDMP step, once its DMPs have stepped: φ(ζ_{k+2}), [`Phase::prepare`]).
+    /// φ(ζ_k) (inside an RDMP step, once its DMPs have stepped: φ(ζ_{k+2}), `Phase::prepare`).
     pub fn current(&self) -> &Features {
         &self.features[self.now]
     }
@@ -326,7 +326,7 @@ impl Phase {
     }
 
     /// Moves from step k to k+1: one basis evaluation, the old φ(ζ_k) becoming φ(ζ_{k+2}),
-    /// unless [`Phase::prepare`] did it.
+    /// unless `Phase::prepare` did it.
     pub fn advance(&mut self) {
         self.prepare();
         self.prepared = false;
