@@ -482,30 +482,7 @@ pub fn parse_trajectory(
             continue;
         }
         let at = |kind| err(path, Some(line_no), kind);
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if fields.len() != CSV_HEADER.len() {
-            return Err(at(ErrorKind::ColumnCount {
-                expected: CSV_HEADER.len(),
-                found: fields.len(),
-            }));
-        }
-        let mut v = [0.0; 12];
-        for (k, f) in fields.iter().enumerate() {
-            let column = CSV_HEADER[k].to_string();
-            let x: f64 = f.parse().map_err(|_| {
-                at(ErrorKind::BadNumber {
-                    column: column.clone(),
-                    value: f.to_string(),
-                })
-            })?;
-            if !x.is_finite() {
-                return Err(at(ErrorKind::NonFinite {
-                    column,
-                    value: f.to_string(),
-                }));
-            }
-            v[k] = x;
-        }
+        let v = parse_row(line).map_err(at)?;
         let s = Sample {
             t: v[0],
             base: [v[1], v[2], v[3]],
@@ -544,6 +521,37 @@ pub fn parse_trajectory(
         ));
     }
     Ok(samples)
+}
+
+/// The 12 numbers of one trajectory row, each finite; a row with another number of columns
+/// is refused first (nothing is allocated unless the row is refused).
+fn parse_row(line: &str) -> Result<[f64; 12], ErrorKind> {
+    let found = line.split(',').count();
+    if found != CSV_HEADER.len() {
+        return Err(ErrorKind::ColumnCount {
+            expected: CSV_HEADER.len(),
+            found,
+        });
+    }
+    let mut v = [0.0; 12];
+    for ((x, f), column) in v
+        .iter_mut()
+        .zip(line.split(',').map(str::trim))
+        .zip(CSV_HEADER)
+    {
+        let number: f64 = f.parse().map_err(|_| ErrorKind::BadNumber {
+            column: column.to_string(),
+            value: f.to_string(),
+        })?;
+        if !number.is_finite() {
+            return Err(ErrorKind::NonFinite {
+                column: column.to_string(),
+                value: f.to_string(),
+            });
+        }
+        *x = number;
+    }
+    Ok(v)
 }
 
 /// CSV text of a trajectory: time to 1 µs, positions to 1 nm and angles to 1 nrad (fine enough
