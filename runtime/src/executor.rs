@@ -403,6 +403,7 @@ impl<'r, 'a> Executor<'r, 'a> {
         let q0 = JointVector::from(q0);
         let mut run = RdmpRun::new_on(
             self.basis.as_ref(),
+            self.rt.chain(),
             &self.rt.model,
             &self.rdmp,
             &q0,
@@ -436,7 +437,12 @@ impl<'r, 'a> Executor<'r, 'a> {
             }
             Some(Segment::Reverse { .. }) if self.prepared.is_some() => {
                 self.reversal
-                    .prepare(&mut self.run, &self.rdmp, &self.rt.config.rdmp)
+                    .prepare(
+                        &mut self.run,
+                        &self.rt.model,
+                        &self.rdmp,
+                        &self.rt.config.rdmp,
+                    )
                     .map_err(|error| Fault::Reverse {
                         segment: i as u8,
                         error,
@@ -635,7 +641,9 @@ impl<'r, 'a> Executor<'r, 'a> {
                 }
                 let target = (*forward.q()).into();
                 // A tick without a step: the reversal's first resume.
-                reversal.prepare(run, rdmp, cfg).map_err(reverse_fault)?;
+                reversal
+                    .prepare(run, model, rdmp, cfg)
+                    .map_err(reverse_fault)?;
                 let speed = self.cfg.retract_speed;
                 *phase = Retraction::Connect(
                     Connect::new(self.last.arm, target, &self.rt.limits, speed, cfg.dt),

@@ -2,6 +2,7 @@
 
 use prf_shared::blob::{Blob, BlobError};
 use prf_shared::field::{Field, Lookups};
+use prf_shared::kinematics::Chain;
 use prf_shared::limits::MotionLimits;
 use prf_shared::motion::{self, MotionClass};
 use prf_shared::rdmp::{Rdmp, RdmpConfig};
@@ -79,6 +80,9 @@ pub struct Runtime<'a> {
     pub config: RuntimeConfig,
     /// The robot's motion limits: every planned arm stream stays within them.
     pub limits: MotionLimits,
+    /// How FK composes the model, read once at load (a run starts on it without reading it
+    /// again in the tick that starts it).
+    chain: Chain,
     classes: heapless::Vec<&'static dyn MotionClass, MAX_CLASSES>,
 }
 
@@ -108,10 +112,16 @@ impl<'a> Runtime<'a> {
         Ok(Runtime {
             blob,
             limits: MotionLimits::kmr_iiwa(&model),
+            chain: Chain::new(&model),
             model,
             config,
             classes,
         })
+    }
+
+    /// How FK composes [`Runtime::model`] ([`Chain`]), read at load.
+    pub fn chain(&self) -> &Chain {
+        &self.chain
     }
 
     /// Number of motion classes in the blob.

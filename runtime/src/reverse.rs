@@ -108,6 +108,7 @@ impl Reversal {
         &mut self,
         b: usize,
         run: &mut Option<RdmpRun>,
+        model: &RobotModel,
         rdmp: &Rdmp,
         cfg: &RdmpConfig,
     ) -> Result<(), ReverseError> {
@@ -120,7 +121,7 @@ impl Reversal {
             .ok_or(ReverseError::MissingCheckpoint)?;
         match run {
             Some(r) => r.resume_from(c),
-            None => *run = Some(RdmpRun::resume(rdmp, cfg, c)?),
+            None => *run = Some(RdmpRun::resume(model, rdmp, cfg, c)?),
         }
         self.refill = Some(Refill { pos: 0, block: b });
         Ok(())
@@ -132,12 +133,13 @@ impl Reversal {
     pub fn prepare(
         &mut self,
         run: &mut Option<RdmpRun>,
+        model: &RobotModel,
         rdmp: &Rdmp,
         cfg: &RdmpConfig,
     ) -> Result<(), ReverseError> {
         let started = matches!(&self.refill, Some(r) if r.block == 1);
         if self.i == 0 && !started && self.blocks() > 1 {
-            self.start_refill(1, run, rdmp, cfg)?;
+            self.start_refill(1, run, model, rdmp, cfg)?;
         }
         Ok(())
     }
@@ -162,7 +164,7 @@ impl Reversal {
         let next_started = matches!(&self.refill, Some(r) if r.block == j + 1);
         if j + 1 < self.blocks() && !next_started {
             // Not started ahead.
-            self.start_refill(j + 1, run, rdmp, cfg)?;
+            self.start_refill(j + 1, run, model, rdmp, cfg)?;
         }
         let len = start - self.block_start(j + 1);
         let mut complete = false;
@@ -181,7 +183,7 @@ impl Reversal {
         }
         if complete && j + 2 < self.blocks() {
             // This tick had no step: start the next block's re-integration.
-            self.start_refill(j + 2, run, rdmp, cfg)?;
+            self.start_refill(j + 2, run, model, rdmp, cfg)?;
         }
         self.i += 1;
         Ok(Some(JointVector::from(q)))
@@ -300,7 +302,7 @@ mod tests {
             }
             let mut slot = kept.then_some(run);
             if prepared {
-                rev.prepare(&mut slot, &r, &cfg).expect("prepare");
+                rev.prepare(&mut slot, &model, &r, &cfg).expect("prepare");
             }
             let mut backward = Vec::new();
             while let Some(q) = rev.next(&mut slot, &model, &r, &cfg).expect("reverse") {

@@ -3,77 +3,56 @@
 //! Arm quantities are expressed in the arm base frame (URDF `link_0`), as the paper's
 //! T_e^b = F_a(q_a); [`platform_pose`] gives T_b = F_m(q_m) and [`arm_base_pose`] chains both.
 
+mod chain;
+mod frame;
+pub mod quaternion;
+
+pub use chain::{Chain, PERMUTATION_TOLERANCE};
+pub use frame::{Frame, quaternion_of};
+
 use crate::robot::{LINK_TOOL, N_FRAMES, RobotModel};
 use crate::se3::Pose;
 use crate::{Jacobian, JointVector, NA};
-use nalgebra::{Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 /// Everything one kinematics evaluation yields at a configuration q_a.
 #[derive(Clone, Copy, Debug)]
 pub struct ArmKinematics {
     /// Frames in the arm base frame: 0 = arm base (identity), 1..=7 = links, 8 = flange.
-    pub frames: [Pose; N_FRAMES],
+    pub frames: [Frame; N_FRAMES],
     /// TCP pose T_e in the arm base frame.
     pub tcp: Pose,
 }
 
 impl ArmKinematics {
-    /// Forward kinematics: T_i = T_{i−1} · origin_i · Rot(axis_i, q_i).
-    ///
-    /// Rot(a, θ) = [cos θ/2, a sin θ/2] with both from one `libm::sincos` (one range
-    /// reduction; the same bits on the host and on the controller). About a z axis, as every
-    /// iiwa joint turns, the product with it is `times_z_rotation`.
-    pub fn new(model: &RobotModel, q: &JointVector) -> Self {
-        let mut kin = ArmKinematics {
-            frames: [Pose::identity(); N_FRAMES],
+    /// Every frame and the TCP at the arm base: a place for [`Chain::kinematics_into`].
+    pub fn identity() -> ArmKinematics {
+        ArmKinematics {
+            frames: [Frame::identity(); N_FRAMES],
             tcp: Pose::identity(),
-        };
-        let frames = &mut kin.frames;
-        for i in 0..NA {
-            let j = &model.joints[i];
-            let (s, c) = libm::sincos(0.5 * q[i]);
-            let mut f = frames[i] * j.origin;
-            let a = j.axis.into_inner();
-            f.rotation = if is_z(&a) {
-                times_z_rotation(&f.rotation, s, c)
-            } else {
-                let a = a * s;
-                f.rotation * UnitQuaternion::new_unchecked(Quaternion::new(c, a.x, a.y, a.z))
-            };
-            frames[i + 1] = f;
         }
-        frames[LINK_TOOL] = frames[NA] * model.flange;
-        kin.tcp = frames[LINK_TOOL] * model.tcp;
-        kin
     }
 
-    /// [`ArmKinematics::new`] with the general quaternion product for every joint: the
-    /// previous implementation, kept as the benchmark's baseline (`prf bench`).
-    pub fn new_general(model: &RobotModel, q: &JointVector) -> Self {
-        let mut frames = [Pose::identity(); N_FRAMES];
-        for i in 0..NA {
-            let j = &model.joints[i];
-            let (s, c) = libm::sincos(0.5 * q[i]);
-            let a = j.axis.into_inner() * s;
-            let rot = UnitQuaternion::new_unchecked(Quaternion::new(c, a.x, a.y, a.z));
-            frames[i + 1] = frames[i] * j.origin * rot;
-        }
-        frames[LINK_TOOL] = frames[NA] * model.flange;
-        let tcp = frames[LINK_TOOL] * model.tcp;
-        ArmKinematics { frames, tcp }
+    /// Forward kinematics of `model` at q: [`Chain::kinematics`] of the model's chain. A
+    /// caller that evaluates many configurations builds the [`Chain`] once and calls that.
+    pub fn new(model: &RobotModel, q: &JointVector) -> Self {
+        Chain::new(model).kinematics(model, q)
     }
 
     /// Geometric Jacobian of the TCP, 6×7, rows [v; ω] in the arm base frame:
-    /// column i = [z_i × (p_e − p_i); z_i].
+    /// column i = [z_i × (p_e − p_i); z_i], z_i the axis of joint i (a column of frame i + 1).
     pub fn jacobian(&self, model: &RobotModel) -> Jacobian {
         let pe = self.tcp.translation.vector;
         let mut jac = Jacobian::zeros();
         for i in 0..NA {
             let f = &self.frames[i + 1];
-            let z = f.rotation * model.joints[i].axis.into_inner();
-            let v = z.cross(&(pe - f.translation.vector));
-            jac.fixed_view_mut::<3, 1>(0, i).copy_from(&v);
-            jac.fixed_view_mut::<3, 1>(3, i).copy_from(&z);
+            let a = model.joints[i].axis.into_inner();
+            let z: Vector3<f64> = if is_z(&a) {
+                f.rotation.column(2).into()
+            } else {
+                f.rotation * a
+            };
+            column_into(&mut jac, i, &z, &pe, &f.origin);
         }
         jac
     }
@@ -84,14 +63,14 @@ impl ArmKinematics {
     pub fn sphere_centres(&self, model: &RobotModel, out: &mut [Vector3<f64>]) {
         for (s, o) in model.spheres.iter().zip(out.iter_mut()) {
             if let Some(frame) = self.frames.get(s.link as usize) {
-                *o = frame.transform_point(&s.centre.into()).coords;
+                *o = frame.transform_point(&s.centre);
             }
         }
     }
 
     /// Centres of the collision spheres in the frame where the arm base is at `base`
     /// (`base · frame · centre`), written to `out` like [`ArmKinematics::sphere_centres`].
-    /// Each frame is composed and turned into a matrix once, not once per sphere.
+    /// Each frame is composed once, not once per sphere.
     pub fn sphere_centres_in(&self, model: &RobotModel, base: &Pose, out: &mut [Vector3<f64>]) {
         let mut frames = FramesIn::new(self, base);
         for (s, o) in model.spheres.iter().zip(out.iter_mut()) {
@@ -102,20 +81,97 @@ impl ArmKinematics {
     }
 }
 
+impl Chain {
+    /// Forward kinematics: T_i = T_{i−1} · origin_i · Rot(axis_i, q_i) as rotation matrices
+    /// (see [`Frame`]), then the flange and the TCP; the TCP's rotation as a quaternion
+    /// ([`quaternion_of`]).
+    pub fn kinematics(&self, model: &RobotModel, q: &JointVector) -> ArmKinematics {
+        let mut kin = ArmKinematics::identity();
+        self.kinematics_into(model, q, &mut kin);
+        kin
+    }
+
+    /// [`Chain::kinematics`] written into `kin`, for a caller that keeps it where it is used
+    /// (returned, the 920 bytes are copied once more).
+    #[inline(always)]
+    pub fn kinematics_into(&self, model: &RobotModel, q: &JointVector, kin: &mut ArmKinematics) {
+        let tcp = self.walk(model, q, |k, f| kin.frames[k] = *f);
+        kin.tcp = tcp.pose();
+    }
+
+    /// The TCP pose alone, with the bits of [`Chain::kinematics`]' `tcp`.
+    #[inline]
+    pub fn tcp(&self, model: &RobotModel, q: &JointVector) -> Pose {
+        self.walk(model, q, |_, _| {}).pose()
+    }
+
+    /// The TCP pose and the Jacobian alone (what an RDMP step needs), with the bits of
+    /// [`Chain::kinematics`]' `tcp` and [`ArmKinematics::jacobian`]: the same frames,
+    /// computed alike, but only each joint's axis and origin kept.
+    #[inline(always)]
+    pub fn tcp_and_jacobian(&self, model: &RobotModel, q: &JointVector) -> (Pose, Jacobian) {
+        let mut axes = [(Vector3::zeros(), Vector3::zeros()); NA];
+        let tcp = self.walk(model, q, |k, f| {
+            if let Some(a) = axes.get_mut(k.wrapping_sub(1)) {
+                *a = (self.axis_of(model, k - 1, f), f.origin);
+            }
+        });
+        let pe = tcp.origin;
+        let mut jac = Jacobian::zeros();
+        for (i, (z, o)) in axes.iter().enumerate() {
+            column_into(&mut jac, i, z, &pe, o);
+        }
+        (tcp.pose(), jac)
+    }
+
+    /// Computes frames 1..=8 in order, showing each to `visit` with its index; returns the
+    /// TCP frame.
+    #[inline(always)]
+    fn walk(
+        &self,
+        model: &RobotModel,
+        q: &JointVector,
+        mut visit: impl FnMut(usize, &Frame),
+    ) -> Frame {
+        let mut f = Frame::identity();
+        for i in 0..NA {
+            f = self.joint(model, i, &f, q[i]);
+            visit(i + 1, &f);
+        }
+        f = self.flange_frame(model, &f);
+        visit(LINK_TOOL, &f);
+        self.tcp_frame(model, &f)
+    }
+}
+
+/// Column i of the geometric Jacobian: [z_i × (p_e − p_i); z_i].
+#[inline(always)]
+fn column_into(
+    jac: &mut Jacobian,
+    i: usize,
+    z: &Vector3<f64>,
+    pe: &Vector3<f64>,
+    o: &Vector3<f64>,
+) {
+    let v = z.cross(&(pe - o));
+    jac.fixed_view_mut::<3, 1>(0, i).copy_from(&v);
+    jac.fixed_view_mut::<3, 1>(3, i).copy_from(z);
+}
+
 /// The frames of one [`ArmKinematics`] where the arm base is at `base`, each composed
-/// (`base · frame`) and turned into a matrix once, on its first use.
+/// (`base · frame`) once, on its first use.
 pub struct FramesIn<'a> {
     kin: &'a ArmKinematics,
-    base: &'a Pose,
-    built: [Option<(Matrix3<f64>, Vector3<f64>)>; N_FRAMES],
+    base: Frame,
+    built: [Option<Frame>; N_FRAMES],
 }
 
 impl<'a> FramesIn<'a> {
     /// No frame composed yet.
-    pub fn new(kin: &'a ArmKinematics, base: &'a Pose) -> Self {
+    pub fn new(kin: &'a ArmKinematics, base: &Pose) -> Self {
         FramesIn {
             kin,
-            base,
+            base: Frame::of_pose(base),
             built: [None; N_FRAMES],
         }
     }
@@ -123,15 +179,12 @@ impl<'a> FramesIn<'a> {
     /// `base · frame · c` for frame `link`; `None` if there is no such frame.
     #[inline]
     pub fn point(&mut self, link: usize, c: &Vector3<f64>) -> Option<Vector3<f64>> {
-        let (kin, base) = (self.kin, self.base);
-        let (r, t) = self.built.get_mut(link)?.get_or_insert_with(|| {
-            let f = base * kin.frames[link];
-            (
-                f.rotation.to_rotation_matrix().into_inner(),
-                f.translation.vector,
-            )
-        });
-        Some(*r * c + *t)
+        let (kin, base) = (self.kin, &self.base);
+        let f = self
+            .built
+            .get_mut(link)?
+            .get_or_insert_with(|| base.then(&kin.frames[link]));
+        Some(f.transform_point(c))
     }
 }
 
@@ -139,19 +192,6 @@ impl<'a> FramesIn<'a> {
 #[inline(always)]
 fn is_z(a: &Vector3<f64>) -> bool {
     a.x == 0.0 && a.y == 0.0 && a.z == 1.0
-}
-
-/// r ⊗ [c, 0, 0, s]: a rotation by θ about z (s = sin θ/2, c = cos θ/2) after r, in 8
-/// products instead of the general product's 16.
-#[inline(always)]
-fn times_z_rotation(r: &UnitQuaternion<f64>, s: f64, c: f64) -> UnitQuaternion<f64> {
-    let (w, x, y, z) = (r.w, r.i, r.j, r.k);
-    UnitQuaternion::new_unchecked(Quaternion::new(
-        w * c - z * s,
-        x * c + y * s,
-        y * c - x * s,
-        z * c + w * s,
-    ))
 }
 
 /// Pose of the platform base frame `b` in the world from q_m = [x, y, yaw].
@@ -192,8 +232,8 @@ mod tests {
         let mut out = [Vector3::zeros(); crate::robot::MAX_SPHERES];
         k.sphere_centres(&model, &mut out);
         for (s, c) in model.spheres.iter().zip(&out) {
-            let local = k.frames[s.link as usize].inverse_transform_point(&(*c).into());
-            assert!((local.coords - s.centre).norm() < 1e-12);
+            let local = k.frames[s.link as usize].inverse_transform_point(c);
+            assert!((local - s.centre).norm() < 1e-12);
         }
         let mut bad = model.clone();
         bad.spheres[3].link = 42;

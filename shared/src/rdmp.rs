@@ -20,11 +20,11 @@ use crate::dmp::{
     Ahead, Basis, DmpError, DmpParams, Forcing, MAX_BASES, MIN_SAMPLES, Phase, PositionDmp,
     PositionState, RotationDmp, RotationState,
 };
-use crate::kinematics::ArmKinematics;
+use crate::kinematics::{ArmKinematics, Chain};
 use crate::nullspace::{JacobianQr, kernel};
 use crate::robot::RobotModel;
 use crate::se3::{Pose, Rot, pose_error};
-use crate::{JointVector, NA};
+use crate::{Jacobian, JointVector, NA};
 use nalgebra::{Isometry3, Translation3, Vector1, Vector3, Vector6};
 
 /// A trained RDMP, w_RDMP = (w_p, w_R, w_γ, γ_g) (Alg. 1).
@@ -201,6 +201,7 @@ pub fn null_space_coordinate(
     if gamma.len() != q.len() {
         return Err(RdmpError::LengthMismatch);
     }
+    let chain = Chain::new(model);
     let mut prev: Option<(JointVector, JointVector)> = None;
     let mut acc = 0.0;
     for (k, (qk, g)) in q.iter().zip(gamma.iter_mut()).enumerate() {
@@ -208,7 +209,7 @@ pub fn null_space_coordinate(
             return Err(RdmpError::NonFinite { step: k });
         }
         let qv = JointVector::from(*qk);
-        let ker = kernel(&ArmKinematics::new(model, &qv).jacobian(model));
+        let ker = kernel(&chain.kinematics(model, &qv).jacobian(model));
         if !(ker.manipulability >= min_manipulability) {
             return Err(RdmpError::SingularDemonstration {
                 sample: k,
@@ -248,7 +249,8 @@ impl Rdmp {
         if let Some(k) = q.iter().position(|s| s.iter().any(|v| !v.is_finite())) {
             return Err(RdmpError::NonFinite { step: k });
         }
-        let tcp = |k: usize| ArmKinematics::new(model, &JointVector::from(q[k])).tcp;
+        let chain = Chain::new(model);
+        let tcp = |k: usize| chain.tcp(model, &JointVector::from(q[k]));
         let position = PositionDmp::train(params, dt, n, |k| tcp(k).translation.vector)?;
         let rotation = RotationDmp::train(params, dt, n, |k| tcp(k).rotation)?;
         let gamma_dmp = PositionDmp::train(params, dt, n, |k| Vector1::new(gamma[k]))?;
@@ -309,6 +311,8 @@ pub struct RdmpRun {
     gamma_measured: f64,
     /// (M, q) of the previous step, for the trapezoid γ measurement.
     previous: Option<(JointVector, JointVector)>,
+    /// How FK composes the model the run started with (the model every step is given).
+    chain: Chain,
 }
 
 /// The integration state of an [`RdmpRun`] without its derived tables (bases, features):
@@ -346,8 +350,13 @@ impl RdmpRun {
     }
 
     /// Continues an integration of `rdmp` from a checkpoint taken with the same RDMP and
-    /// step Δt: the following steps equal those of the original run bit for bit.
-    pub fn resume(rdmp: &Rdmp, cfg: &RdmpConfig, c: &RdmpCheckpoint) -> Result<Self, RdmpError> {
+    /// step Δt on `model`: the following steps equal those of the original run bit for bit.
+    pub fn resume(
+        model: &RobotModel,
+        rdmp: &Rdmp,
+        cfg: &RdmpConfig,
+        c: &RdmpCheckpoint,
+    ) -> Result<Self, RdmpError> {
         let p = &rdmp.position;
         let mut phase = Phase::resume(&p.params, p.tau, cfg.dt, c.step, c.zeta, c.zeta_next)?;
         phase.n_steps = c.n_steps;
@@ -360,6 +369,7 @@ impl RdmpRun {
             ahead: (None, None, None),
             gamma_measured: c.gamma_measured,
             previous: c.previous,
+            chain: Chain::new(model),
         })
     }
 
@@ -386,14 +396,16 @@ impl RdmpRun {
         goal: &Pose,
         cfg: &RdmpConfig,
     ) -> Result<Self, RdmpError> {
-        Self::new_on(None, model, rdmp, q0, goal, cfg)
+        Self::new_on(None, &Chain::new(model), model, rdmp, q0, goal, cfg)
     }
 
     /// [`RdmpRun::new`] with the phase's bases copied from `basis` when they are the RDMP's
     /// ([`Basis::is_for`]): the same run, bit for bit, without computing the n_g bases (the
-    /// costly part of a start on a controller without a fast `exp`).
+    /// costly part of a start on a controller without a fast `exp`), and FK composed as
+    /// `chain`, which must be `model`'s ([`Chain::new`]; the executor reads it once at load).
     pub fn new_on(
         basis: Option<&Basis>,
+        chain: &Chain,
         model: &RobotModel,
         rdmp: &Rdmp,
         q0: &JointVector,
@@ -406,7 +418,7 @@ impl RdmpRun {
         if q0.iter().any(|v| !v.is_finite()) {
             return Err(RdmpError::NonFinite { step: 0 });
         }
-        let start = ArmKinematics::new(model, q0).tcp;
+        let start = chain.tcp(model, q0);
         // The three DMPs share one phase (the position DMP's, as in `step`): it is built once.
         let (position, phase) = rdmp.position.start_on(
             basis,
@@ -428,6 +440,7 @@ impl RdmpRun {
             ahead: (None, None, None),
             gamma_measured: 0.0,
             previous: None,
+            chain: *chain,
         })
     }
 
@@ -464,14 +477,27 @@ impl RdmpRun {
         self.phase.finished()
     }
 
-    /// Advances one step Δt (Alg. 2, lines 14–23, closed loop).
+    /// Advances one step Δt (Alg. 2, lines 14–23, closed loop). FK computes the TCP and the
+    /// Jacobian alone ([`Chain::tcp_and_jacobian`]), with the bits of
+    /// [`RdmpRun::step_observed`]. (The two are written out: sharing their body through a
+    /// closure cost 1 % of the step, 48 instructions.)
     pub fn step(
         &mut self,
         model: &RobotModel,
         rdmp: &Rdmp,
         cfg: &RdmpConfig,
     ) -> Result<RdmpStep, RdmpError> {
-        self.step_observed(model, rdmp, cfg, |_| {})
+        if self.phase.finished() {
+            return Err(RdmpError::Finished);
+        }
+        let moved = Moved::of(self);
+        let dmp = self.dmps(rdmp, cfg);
+        let (tcp, jac) = self.chain.tcp_and_jacobian(model, &self.q);
+        let result = self.advance(model, cfg, &tcp, &jac, &dmp);
+        if result.is_err() {
+            moved.put_back(self);
+        }
+        result
     }
 
     /// [`RdmpRun::step`], showing `observe` the kinematics of the configuration it steps
@@ -490,9 +516,10 @@ impl RdmpRun {
         // leaves the run unchanged without copying the states in and out on every step.
         let moved = Moved::of(self);
         let dmp = self.dmps(rdmp, cfg);
-        let kin = ArmKinematics::new(model, &self.q);
+        let mut kin = ArmKinematics::identity();
+        self.chain.kinematics_into(model, &self.q, &mut kin);
         observe(&kin);
-        let result = self.advance(model, cfg, &kin, &dmp);
+        let result = self.advance(model, cfg, &kin.tcp, &kin.jacobian(model), &dmp);
         if result.is_err() {
             moved.put_back(self);
         }
@@ -535,11 +562,12 @@ impl RdmpRun {
         &mut self,
         model: &RobotModel,
         cfg: &RdmpConfig,
-        kin: &ArmKinematics,
+        tcp: &Pose,
+        jac: &Jacobian,
         dmp: &DmpVelocities,
     ) -> Result<RdmpStep, RdmpError> {
         let k = self.phase.step;
-        let qr = JacobianQr::new(&kin.jacobian(model));
+        let qr = JacobianQr::new(jac);
         self.phase.prepare();
         let manipulability = qr.manipulability();
         if !(manipulability >= cfg.min_manipulability) {
@@ -548,7 +576,7 @@ impl RdmpRun {
                 manipulability,
             });
         }
-        let (e_p, e_r) = pose_error(&dmp.pose, &kin.tcp);
+        let (e_p, e_r) = pose_error(&dmp.pose, tcp);
         let twist = join(&(dmp.v + e_p * cfg.gain), &(dmp.w + e_r * cfg.gain));
         let (ker, pinv) = qr.kernel_and_pinv(&twist);
         let mut gamma_measured = self.gamma_measured;

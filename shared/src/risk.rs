@@ -8,9 +8,10 @@
 
 use crate::field::{DistanceField, Hint};
 use crate::float::norm;
-use crate::kinematics::{ArmKinematics, FramesIn};
+use crate::kinematics::{ArmKinematics, Frame, FramesIn};
 use crate::robot::{MAX_SPHERES, N_FRAMES, RobotModel};
 use crate::se3::Pose;
+use core::f64::consts::FRAC_1_SQRT_2;
 use nalgebra::Vector3;
 
 /// η(x) = max(x, 0) (Sec. 4.1).
@@ -165,20 +166,25 @@ fn raise(excess: &mut f64, d: f64, stop: f64, level: f64, radius: f64) -> bool {
     true
 }
 
+/// An allowance added to each frame's ‖ΔR‖ for rounding: FK's rotation matrices are products
+/// of at most nine rotations and lie within about 5e-15 of a rotation (δ), and the spectral
+/// norm of a difference of two such matrices exceeds ‖·‖_F / √2 by at most (2 + √2) δ.
+const TURN_ROUNDING: f64 = 2e-14;
+
 /// Bounds of how far each collision sphere's centre moved since its last lookup, from the
 /// motion of its frame between the configurations added.
 ///
-/// A point at distance ρ from its frame's origin moves by at most |Δt| + |ΔR|·ρ when the frame
-/// moves by (ΔR, Δt), and for unit quaternions with the sign that brings them closest,
-/// |ΔR| = 2 sin(θ/2) ≤ 2 |Δq| (|Δq| = 2 sin(θ/4), θ the angle between them). Summed over the
-/// configurations, Σ|Δt| + ρ Σ 2|Δq| bounds the distance from the centre of the last lookup;
-/// while it stays below the room that lookup left ([`DistanceField::settled_within`]), the
-/// lookup is skipped.
+/// A point at distance ρ from its frame's origin moves by at most |Δt| + ‖ΔR‖·ρ when the frame
+/// moves by (ΔR, Δt). For two rotations θ apart, ΔR = R_a (I − R_aᵀ R_b) has the singular
+/// values 2 sin(θ/2), 2 sin(θ/2) and 0, so ‖ΔR‖ = ‖ΔR‖_F / √2; [`TURN_ROUNDING`] covers how
+/// far FK's matrices are from rotations. Summed over the configurations, Σ|Δt| + ρ Σ‖ΔR‖
+/// bounds the distance from the centre of the last lookup; while it stays below the room that
+/// lookup left ([`DistanceField::settled_within`]), the lookup is skipped.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Travel {
     /// The previous configuration's frames and arm base, `None` before the first.
-    last: Option<([Pose; N_FRAMES], Pose)>,
-    /// Per frame, (Σ|Δt|, Σ 2|Δq|) over the configurations added.
+    last: Option<([Frame; N_FRAMES], Pose)>,
+    /// Per frame, (Σ|Δt|, Σ‖ΔR‖) over the configurations added.
     moved: [(f64, f64); N_FRAMES],
     /// Per sphere, its room since its last lookup.
     leashes: [Leash; MAX_SPHERES],
@@ -201,11 +207,9 @@ impl Travel {
         match &self.last {
             Some((frames, last)) if last == base => {
                 for ((a, b), m) in frames.iter().zip(&kin.frames).zip(&mut self.moved) {
-                    let (p, q) = (a.rotation.coords, b.rotation.coords);
-                    let (minus, plus) = ((q - p).norm_squared(), (q + p).norm_squared());
-                    let turn = if plus < minus { plus } else { minus };
-                    m.0 += norm(&(b.translation.vector - a.translation.vector));
-                    m.1 += 2.0 * crate::float::sqrt(turn);
+                    let turn = crate::float::sqrt((b.rotation - a.rotation).norm_squared());
+                    m.0 += norm(&(b.origin - a.origin));
+                    m.1 += turn * FRAC_1_SQRT_2 + TURN_ROUNDING;
                 }
             }
             _ => self.leashes.iter_mut().for_each(|l| l.room = 0.0),
@@ -217,7 +221,7 @@ impl Travel {
 /// A sphere's room around its last lookup, and where its frame's sums stood then.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Leash {
-    /// The frame's (Σ|Δt|, Σ 2|Δq|) at the lookup.
+    /// The frame's (Σ|Δt|, Σ‖ΔR‖) at the lookup.
     from: (f64, f64),
     /// ρ: the centre's distance from its frame's origin.
     arm: f64,

@@ -4,9 +4,11 @@
 mod common;
 
 use common::{deg, fixture};
-use nalgebra::{Matrix4, Quaternion, UnitQuaternion, Vector3};
-use prf_shared::kinematics::{ArmKinematics, arm_base_pose, platform_pose};
+use nalgebra::{Matrix3, Matrix4, Quaternion, UnitQuaternion, Vector3};
+use prf_shared::kinematics::quaternion::QuaternionKinematics;
+use prf_shared::kinematics::{ArmKinematics, Chain, arm_base_pose, platform_pose, quaternion_of};
 use prf_shared::robot::{LINK_TOOL, RobotModel};
+use prf_shared::se3::Pose;
 use prf_shared::se3::log;
 use prf_shared::{JointVector, NA};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
@@ -30,7 +32,7 @@ fn fk_matches_pybullet() {
             let r = &row[NA + 7 * (link - 1)..NA + 7 * link];
             let p = Vector3::new(r[0], r[1], r[2]);
             let rot = UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]));
-            let f = &k.frames[link];
+            let f = k.frames[link].pose();
             let dp = (f.translation.vector - p).norm();
             let dr = log(&(f.rotation * rot.inverse())).norm();
             // Bullet stores link frames in single precision in places: 1e-6 m / 1e-6 rad.
@@ -70,14 +72,14 @@ fn flange_matches_dh_model() {
     // The DH flange frame equals ours up to one constant rotation (different frame axes,
     // same joint angles and signs).
     let offset = {
-        let ours = ArmKinematics::new(&model, &JointVector::zeros()).frames[LINK_TOOL];
+        let ours = ArmKinematics::new(&model, &JointVector::zeros()).frames[LINK_TOOL].pose();
         ours.rotation.to_rotation_matrix().matrix().transpose()
             * dh_flange(&JointVector::zeros()).fixed_view::<3, 3>(0, 0)
     };
     for _ in 0..200 {
         let q = random_q(&mut rng, &model);
         let dh = dh_flange(&q);
-        let ours = ArmKinematics::new(&model, &q).frames[LINK_TOOL];
+        let ours = ArmKinematics::new(&model, &q).frames[LINK_TOOL].pose();
         let dp = (ours.translation.vector - dh.fixed_view::<3, 1>(0, 3)).norm();
         let dr = (ours.rotation.to_rotation_matrix().matrix() * offset
             - dh.fixed_view::<3, 3>(0, 0))
@@ -205,34 +207,107 @@ fn limits_are_the_iiwa14_datasheet() {
     assert!(model.limit_violation(&model.home).is_none());
 }
 
-/// Every iiwa joint turns about z, and FK multiplies by that rotation in 8 products: the frames
-/// and TCP carry the general quaternion product's bits. A joint whose axis is not z (here −z,
-/// turned the other way) takes the general product and gives the same pose to rounding.
-#[test]
-fn the_z_axis_product_gives_the_general_products_bits() {
+/// The iiwa (every origin a signed permutation, every axis z); joint 4 about −z (Rodrigues'
+/// matrix); joint 3's origin turned off the permutations and the flange and TCP turned (matrix
+/// products).
+fn three_models() -> [RobotModel; 3] {
     let model = RobotModel::kmr_iiwa14();
     let mut flipped = model.clone();
     flipped.joints[3].axis = -Vector3::z_axis();
-    let bits = |p: &prf_shared::se3::Pose| {
+    let mut tilted = model.clone();
+    tilted.joints[2].origin.rotation *= UnitQuaternion::from_euler_angles(0.3, -0.2, 0.1);
+    tilted.flange.rotation = UnitQuaternion::from_euler_angles(0.0, 0.0, 0.7);
+    tilted.tcp.rotation = UnitQuaternion::from_euler_angles(0.0, 0.4, 0.0);
+    [model, flipped, tilted]
+}
+
+/// FK by rotation matrices against the previous implementation by unit quaternions (a second
+/// implementation): the iiwa (every origin a signed permutation, every axis z), a joint about
+/// −z (Rodrigues' matrix), and an origin turned 0.3 rad off the permutations (a matrix
+/// product). Every frame, the TCP and the Jacobian agree to 1e-13, and the frames' rotations
+/// stay orthonormal to 1e-14 (what the risk's travel bound allows for).
+#[test]
+fn matrix_fk_matches_quaternion_fk() {
+    let mut rng = StdRng::seed_from_u64(20);
+    let mut worst = (0.0f64, 0.0f64);
+    for m in &three_models() {
+        for _ in 0..2000 {
+            let q = random_q(&mut rng, m);
+            let (ours, reference) = (ArmKinematics::new(m, &q), QuaternionKinematics::new(m, &q));
+            let apart = |a: &Pose, b: &Pose| {
+                let dp = (a.translation.vector - b.translation.vector).norm();
+                dp.max(log(&(a.rotation * b.rotation.inverse())).norm())
+            };
+            for (a, b) in ours.frames.iter().zip(&reference.frames) {
+                worst.0 = worst.0.max(apart(&a.pose(), b));
+                let gram = a.rotation.transpose() * a.rotation - Matrix3::identity();
+                worst.1 = worst.1.max(gram.norm());
+            }
+            worst.0 = worst.0.max(apart(&ours.tcp, &reference.tcp));
+            let dj = (ours.jacobian(m) - reference.jacobian(m)).abs().max();
+            worst.0 = worst.0.max(dj);
+        }
+    }
+    assert!(
+        worst.0 < 1e-13,
+        "frames, TCP or Jacobian {:e} apart",
+        worst.0
+    );
+    assert!(worst.1 < 1e-14, "RᵀR − I up to {:e}", worst.1);
+}
+
+/// What an RDMP step computes (the TCP and the Jacobian alone, `Chain::tcp_and_jacobian`), a
+/// run's start (`Chain::tcp`) and what the planner observes (every frame, then
+/// `ArmKinematics::jacobian`) are the same bits, so the executor emits what was certified.
+#[test]
+fn every_entry_point_gives_the_same_bits() {
+    let bits = |p: &Pose| {
         let (t, r) = (p.translation.vector, p.rotation.quaternion());
         [t.x, t.y, t.z, r.w, r.i, r.j, r.k].map(f64::to_bits)
     };
-    let mut rng = StdRng::seed_from_u64(20);
-    for _ in 0..2000 {
-        let q = random_q(&mut rng, &model);
-        let (fast, general) = (
-            ArmKinematics::new(&model, &q),
-            ArmKinematics::new_general(&model, &q),
-        );
-        for (a, b) in fast.frames.iter().zip(&general.frames) {
-            assert_eq!(bits(a), bits(b), "q = {q:?}");
+    let mut rng = StdRng::seed_from_u64(22);
+    for m in &three_models() {
+        let chain = Chain::new(m);
+        for _ in 0..500 {
+            let q = random_q(&mut rng, m);
+            let all = chain.kinematics(m, &q);
+            let (tcp, jac) = chain.tcp_and_jacobian(m, &q);
+            assert_eq!(bits(&tcp), bits(&all.tcp), "q = {q:?}");
+            assert_eq!(bits(&chain.tcp(m, &q)), bits(&all.tcp), "q = {q:?}");
+            let same = jac
+                .iter()
+                .zip(all.jacobian(m).iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "q = {q:?}");
         }
-        assert_eq!(bits(&fast.tcp), bits(&general.tcp), "q = {q:?}");
-        let mut q_flipped = q;
-        q_flipped[3] = -q[3];
-        let other = ArmKinematics::new(&flipped, &q_flipped).tcp;
-        let dp = (other.translation.vector - fast.tcp.translation.vector).norm();
-        let dr = log(&(other.rotation * fast.tcp.rotation.inverse())).norm();
-        assert!(dp < 1e-12 && dr < 1e-12, "q = {q:?}: {dp} m, {dr} rad");
     }
+}
+
+/// The quaternion of a rotation matrix on each of its four branches (trace positive, or the
+/// largest diagonal entry x, y or z): it rotates like the matrix.
+#[test]
+fn quaternion_of_a_matrix_rotates_alike() {
+    let mut rng = StdRng::seed_from_u64(21);
+    let v = Vector3::new(0.3, -1.2, 0.7);
+    let mut branches = [false; 4];
+    for k in 0..4000 {
+        let angle = if k % 2 == 0 {
+            3.1
+        } else {
+            rng.random_range(0.0..std::f64::consts::PI)
+        };
+        let axis = Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let r = UnitQuaternion::from_scaled_axis(axis.normalize() * angle);
+        let m = r.to_rotation_matrix().into_inner();
+        let d = m.diagonal();
+        branches[if m.trace() > 0.0 { 0 } else { 1 + d.imax() }] = true;
+        let q = quaternion_of(&m);
+        assert!((q.norm() - 1.0).abs() < 1e-15, "{m}");
+        assert!((q * v - m * v).norm() < 1e-14, "{m}");
+    }
+    assert_eq!(branches, [true; 4]);
 }

@@ -5,7 +5,7 @@ mod common;
 use common::{deg, joint_demo};
 use nalgebra::{Isometry3, Translation3, Vector3};
 use prf_shared::dmp::DmpParams;
-use prf_shared::kinematics::ArmKinematics;
+use prf_shared::kinematics::{ArmKinematics, Chain};
 use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpError, RdmpRun, integrate, null_space_coordinate};
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::{exp, log};
@@ -275,7 +275,11 @@ fn a_run_started_on_reused_bases_steps_as_a_fresh_one() {
     let other = f.rdmp.time_scaled(1.7);
     let donor = RdmpRun::new(&f.model, &other, &q0, &goal, &f.cfg).unwrap();
     assert!(donor.basis().is_for(&f.rdmp.position.params));
-    let mut reused = RdmpRun::new_on(Some(donor.basis()), &f.model, &f.rdmp, &q0, &goal, &f.cfg);
+    let chain = Chain::new(&f.model);
+    let start_on = |basis: Option<&prf_shared::dmp::Basis>| {
+        RdmpRun::new_on(basis, &chain, &f.model, &f.rdmp, &q0, &goal, &f.cfg)
+    };
+    let mut reused = start_on(Some(donor.basis()));
     assert_eq!(bits(reused.as_mut().unwrap()), fresh);
     // Bases of other parameters are not taken: 20 bases, or another phase rate.
     for params in [
@@ -290,7 +294,7 @@ fn a_run_started_on_reused_bases_steps_as_a_fresh_one() {
     ] {
         let basis = prf_shared::dmp::Basis::new(&params).unwrap();
         assert!(!basis.is_for(&f.rdmp.position.params));
-        let mut run = RdmpRun::new_on(Some(&basis), &f.model, &f.rdmp, &q0, &goal, &f.cfg).unwrap();
+        let mut run = start_on(Some(&basis)).unwrap();
         assert_eq!(bits(&mut run), fresh);
     }
     // Bad parameters are refused as without reused bases.
@@ -298,7 +302,16 @@ fn a_run_started_on_reused_bases_steps_as_a_fresh_one() {
     bad.position.params.alpha_z = f64::NAN;
     assert!(RdmpRun::new(&f.model, &bad, &q0, &goal, &f.cfg).is_err());
     assert_eq!(
-        RdmpRun::new_on(Some(donor.basis()), &f.model, &bad, &q0, &goal, &f.cfg).err(),
+        RdmpRun::new_on(
+            Some(donor.basis()),
+            &Chain::new(&f.model),
+            &f.model,
+            &bad,
+            &q0,
+            &goal,
+            &f.cfg
+        )
+        .err(),
         RdmpRun::new(&f.model, &bad, &q0, &goal, &f.cfg).err()
     );
 }

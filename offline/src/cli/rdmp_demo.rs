@@ -166,7 +166,7 @@ pub fn run(args: &Args) -> Result<()> {
         }
         let elbow_x = |q: &[f64; NA]| {
             ArmKinematics::new(&model, &JointVector::from(*q)).frames[4]
-                .translation
+                .origin
                 .x
         };
         let mut series = vec![Series {

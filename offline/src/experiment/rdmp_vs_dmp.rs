@@ -232,9 +232,7 @@ impl ApproachResult {
 
 /// The elbow's x in the arm base frame.
 pub fn elbow_x(model: &RobotModel, q: &JointVector) -> f64 {
-    ArmKinematics::new(model, q).frames[ELBOW_LINK]
-        .translation
-        .x
+    ArmKinematics::new(model, q).frames[ELBOW_LINK].origin.x
 }
 
 /// Rates a trajectory one configuration at a time: its risk in Ω+ and its elbow trace, from
@@ -265,7 +263,7 @@ impl<'a, F: DistanceField> Rater<'a, F> {
         if k.is_multiple_of(TRACE_EVERY) {
             let dt = RdmpConfig::default().dt;
             self.elbow
-                .push((k as f64 * dt, kin.frames[ELBOW_LINK].translation.x));
+                .push((k as f64 * dt, kin.frames[ELBOW_LINK].origin.x));
         }
     }
 

@@ -1,0 +1,220 @@
+//! How forward kinematics composes a [`RobotModel`]'s fixed rotations, read once from the
+//! model: a few bytes per joint, so a run can keep its own copy.
+
+use super::frame::Frame;
+use crate::NA;
+use crate::robot::RobotModel;
+use crate::se3::Pose;
+use nalgebra::{Matrix3, Unit, Vector3};
+
+/// How far an entry of a fixed rotation may lie from 0 or ±1 and still be read as that value.
+/// URDF states origins as decimal roll-pitch-yaw angles, so π/2 comes in rounded and the
+/// iiwa's origin rotations are signed permutations only to about 1e-16; taking them as exact
+/// moves no point of the arm by more than 1e-12 of its distance from the joint.
+pub const PERMUTATION_TOLERANCE: f64 = 1e-12;
+
+/// A fixed rotation M as FK applies it, R ↦ R M.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Turn {
+    /// M = I (a flange or TCP without a turn).
+    Identity,
+    /// M is a signed permutation (every iiwa origin): column j of R M is `sign[j]` (±1) times
+    /// column `index[j]` of R, with no products to round.
+    Columns { index: [u8; 3], sign: [i8; 3] },
+    /// Any other rotation: the model's quaternion as a matrix, and a matrix product.
+    General,
+}
+
+impl Turn {
+    /// The turn of `r`: [`Turn::Columns`] when every column of its matrix is ± a distinct unit
+    /// axis within [`PERMUTATION_TOLERANCE`], [`Turn::Identity`] for the identity.
+    fn of(r: &nalgebra::UnitQuaternion<f64>) -> Turn {
+        let m = r.to_rotation_matrix().into_inner();
+        let mut index = [0u8; 3];
+        let mut sign = [0i8; 3];
+        let mut used = [false; 3];
+        for c in 0..3 {
+            let col = m.column(c);
+            let near = |v: f64, to: f64| (v.abs() - to).abs() <= PERMUTATION_TOLERANCE;
+            let Some(r) = (0..3).find(|&r| near(col[r], 1.0)) else {
+                return Turn::General;
+            };
+            if used[r] || !(0..3).all(|k| k == r || near(col[k], 0.0)) {
+                return Turn::General;
+            }
+            used[r] = true;
+            index[c] = r as u8;
+            sign[c] = if col[r] > 0.0 { 1 } else { -1 };
+        }
+        if index == [0, 1, 2] && sign == [1; 3] {
+            Turn::Identity
+        } else {
+            Turn::Columns { index, sign }
+        }
+    }
+
+    /// The columns of R M, M the rotation this turn was read from.
+    #[inline(always)]
+    fn after(
+        &self,
+        r: &Matrix3<f64>,
+        rotation: &nalgebra::UnitQuaternion<f64>,
+    ) -> [Vector3<f64>; 3] {
+        match self {
+            Turn::Identity => [r.column(0).into(), r.column(1).into(), r.column(2).into()],
+            Turn::Columns { index, sign } => {
+                let col = |j: usize| r.column(index[j] as usize) * f64::from(sign[j]);
+                [col(0), col(1), col(2)]
+            }
+            Turn::General => {
+                let p = r * rotation.to_rotation_matrix().into_inner();
+                [p.column(0).into(), p.column(1).into(), p.column(2).into()]
+            }
+        }
+    }
+}
+
+/// How FK composes one model: how each joint origin's, the flange's and the TCP's rotation
+/// is applied (a signed permutation's columns, none, or a general rotation) and which joints
+/// turn about z. The translations, general rotations and other axes are read from the model
+/// itself, so [`Chain::kinematics`] takes the model this chain was read from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Chain {
+    origins: [Turn; NA],
+    /// Joint i turns about z (the two columns it mixes are turned in place).
+    about_z: [bool; NA],
+    flange: Turn,
+    tcp: Turn,
+}
+
+impl Chain {
+    /// The chain of `model`.
+    pub fn new(model: &RobotModel) -> Chain {
+        Chain {
+            origins: core::array::from_fn(|i| Turn::of(&model.joints[i].origin.rotation)),
+            about_z: core::array::from_fn(|i| super::is_z(&model.joints[i].axis)),
+            flange: Turn::of(&model.flange.rotation),
+            tcp: Turn::of(&model.tcp.rotation),
+        }
+    }
+
+    /// Frame i + 1 from frame i: T_{i+1} = T_i · origin_i · Rot(axis_i, q_i), with sin and cos
+    /// from one `libm::sincos` (the same bits on the host and on the controller).
+    #[inline(always)]
+    pub(super) fn joint(&self, model: &RobotModel, i: usize, f: &Frame, q: f64) -> Frame {
+        let joint = &model.joints[i];
+        let origin = f.transform_point(&joint.origin.translation.vector);
+        let (s, c) = libm::sincos(q);
+        let rotation = match (&self.origins[i], self.about_z[i]) {
+            // [σ0 r_i0, σ1 r_i1, σ2 r_i2] · Rot(z, q), the signs σ moved onto c and s (exact,
+            // as σ = ±1): the third column stays.
+            (Turn::Columns { index, sign }, true) => {
+                let r = |j: usize| f.rotation.column(index[j] as usize);
+                let (s0, s1) = (f64::from(sign[0]), f64::from(sign[1]));
+                let (r0, r1) = (r(0), r(1));
+                Matrix3::from_columns(&[
+                    r0 * (c * s0) + r1 * (s * s1),
+                    r1 * (c * s1) - r0 * (s * s0),
+                    r(2) * f64::from(sign[2]),
+                ])
+            }
+            (turn, true) => {
+                let [a0, a1, a2] = turn.after(&f.rotation, &joint.origin.rotation);
+                Matrix3::from_columns(&[a0 * c + a1 * s, a1 * c - a0 * s, a2])
+            }
+            (turn, false) => {
+                let a = turn.after(&f.rotation, &joint.origin.rotation);
+                Matrix3::from_columns(&a) * rodrigues(&joint.axis, s, c)
+            }
+        };
+        Frame { rotation, origin }
+    }
+
+    /// The axis of joint i in the arm base frame, from frame i + 1 (which turns about it):
+    /// its third column for z, as [`super::ArmKinematics::jacobian`] reads it.
+    #[inline(always)]
+    pub(super) fn axis_of(&self, model: &RobotModel, i: usize, f: &Frame) -> Vector3<f64> {
+        if self.about_z[i] {
+            f.rotation.column(2).into()
+        } else {
+            f.rotation * model.joints[i].axis.into_inner()
+        }
+    }
+
+    /// The flange frame from link 7's.
+    #[inline(always)]
+    pub(super) fn flange_frame(&self, model: &RobotModel, f: &Frame) -> Frame {
+        fixed(&self.flange, &model.flange, f)
+    }
+
+    /// The TCP frame from the flange's.
+    #[inline(always)]
+    pub(super) fn tcp_frame(&self, model: &RobotModel, f: &Frame) -> Frame {
+        fixed(&self.tcp, &model.tcp, f)
+    }
+}
+
+/// f · p for a fixed transform p whose rotation reads as `turn`.
+#[inline(always)]
+fn fixed(turn: &Turn, p: &Pose, f: &Frame) -> Frame {
+    let origin = f.transform_point(&p.translation.vector);
+    let rotation = match turn {
+        Turn::Identity => f.rotation,
+        turn => Matrix3::from_columns(&turn.after(&f.rotation, &p.rotation)),
+    };
+    Frame { rotation, origin }
+}
+
+/// Rot(a, θ) = c I + s [a]× + (1 − c) a aᵀ (Rodrigues), from s = sin θ, c = cos θ.
+fn rodrigues(a: &Unit<Vector3<f64>>, s: f64, c: f64) -> Matrix3<f64> {
+    let (x, y, z) = (a.x, a.y, a.z);
+    let v = 1.0 - c;
+    Matrix3::new(
+        c + x * x * v,
+        x * y * v - z * s,
+        x * z * v + y * s,
+        y * x * v + z * s,
+        c + y * y * v,
+        y * z * v - x * s,
+        z * x * v - y * s,
+        z * y * v + x * s,
+        c + z * z * v,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::UnitQuaternion;
+
+    /// The iiwa's origins read as signed permutations, its flange and TCP as the identity;
+    /// a turn 1e-9 rad off a permutation, or any other, is taken as it is.
+    #[test]
+    fn origins_are_read_as_permutations_only_when_they_are() {
+        let model = RobotModel::kmr_iiwa14();
+        let chain = Chain::new(&model);
+        assert!(
+            chain.origins[1..]
+                .iter()
+                .all(|t| matches!(t, Turn::Columns { .. }))
+        );
+        assert_eq!(chain.origins[0], Turn::Identity);
+        assert_eq!((chain.flange, chain.tcp), (Turn::Identity, Turn::Identity));
+        assert_eq!(chain.about_z, [true; NA]);
+        let half = core::f64::consts::FRAC_PI_2;
+        let quarter_about_x = UnitQuaternion::from_euler_angles(half, 0.0, 0.0);
+        assert_eq!(
+            Turn::of(&quarter_about_x),
+            Turn::Columns {
+                index: [0, 2, 1],
+                sign: [1, 1, -1]
+            }
+        );
+        let off = UnitQuaternion::from_euler_angles(half + 1e-9, 0.0, 0.0);
+        assert_eq!(Turn::of(&off), Turn::General);
+        assert_eq!(
+            Turn::of(&UnitQuaternion::from_euler_angles(0.3, 0.0, 0.0)),
+            Turn::General
+        );
+    }
+}
