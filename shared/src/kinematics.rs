@@ -44,14 +44,9 @@ impl ArmKinematics {
     pub fn jacobian(&self, model: &RobotModel) -> Jacobian {
         let pe = self.tcp.translation.vector;
         let mut jac = Jacobian::zeros();
-        for i in 0..NA {
+        for (i, joint) in model.joints.iter().enumerate() {
             let f = &self.frames[i + 1];
-            let a = model.joints[i].axis.into_inner();
-            let z: Vector3<f64> = if is_z(&a) {
-                f.rotation.column(2).into()
-            } else {
-                f.rotation * a
-            };
+            let z = joint_axis(f, &joint.axis, is_z(&joint.axis));
             column_into(&mut jac, i, &z, &pe, &f.origin);
         }
         jac
@@ -144,6 +139,17 @@ impl Chain {
     }
 }
 
+/// The axis `axis` of a joint in the arm base frame, from the frame that follows the joint
+/// (which turns about it): that frame's third column when `about_z`.
+#[inline(always)]
+fn joint_axis(f: &Frame, axis: &Vector3<f64>, about_z: bool) -> Vector3<f64> {
+    if about_z {
+        f.rotation.column(2).into()
+    } else {
+        f.rotation * axis
+    }
+}
+
 /// Column i of the geometric Jacobian: [z_i × (p_e − p_i); z_i].
 #[inline(always)]
 fn column_into(
@@ -232,7 +238,8 @@ mod tests {
         let mut out = [Vector3::zeros(); crate::robot::MAX_SPHERES];
         k.sphere_centres(&model, &mut out);
         for (s, c) in model.spheres.iter().zip(&out) {
-            let local = k.frames[s.link as usize].inverse_transform_point(c);
+            let f = &k.frames[s.link as usize];
+            let local = f.rotation.tr_mul(&(c - f.origin));
             assert!((local - s.centre).norm() < 1e-12);
         }
         let mut bad = model.clone();

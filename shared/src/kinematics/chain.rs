@@ -130,15 +130,10 @@ impl Chain {
         Frame { rotation, origin }
     }
 
-    /// The axis of joint i in the arm base frame, from frame i + 1 (which turns about it):
-    /// its third column for z, as [`super::ArmKinematics::jacobian`] reads it.
+    /// The axis of joint i in the arm base frame, from frame i + 1 ([`super::joint_axis`]).
     #[inline(always)]
     pub(super) fn axis_of(&self, model: &RobotModel, i: usize, f: &Frame) -> Vector3<f64> {
-        if self.about_z[i] {
-            f.rotation.column(2).into()
-        } else {
-            f.rotation * model.joints[i].axis.into_inner()
-        }
+        super::joint_axis(f, &model.joints[i].axis, self.about_z[i])
     }
 
     /// The flange frame from link 7's.

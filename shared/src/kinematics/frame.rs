@@ -46,11 +46,6 @@ impl Frame {
         self.rotation * c + self.origin
     }
 
-    /// Rᵀ (x − p): the inverse of [`Frame::transform_point`].
-    pub fn inverse_transform_point(&self, x: &Vector3<f64>) -> Vector3<f64> {
-        self.rotation.tr_mul(&(x - self.origin))
-    }
-
     /// self · other: `other` given in this frame, expressed where this frame is given.
     #[inline(always)]
     pub fn then(&self, other: &Frame) -> Frame {
