@@ -425,6 +425,8 @@ fn killed_cell_makes_the_watchdog_brake_within_limits() {
 enum Stalled {
     Firmware,
     Cell,
+    /// Both at once: the host froze.
+    Both,
 }
 
 /// What one stall did.
@@ -450,15 +452,20 @@ fn stall(who: Stalled, ms: u64) -> Stall {
         sp.last()
             .is_some_and(|s| s.mode == mode::ARM && s.qd.iter().any(|v| v.abs() > 0.3))
     });
-    let child = match who {
-        Stalled::Firmware => &fw.0,
-        Stalled::Cell => &run.0,
+    let children = match who {
+        Stalled::Firmware => vec![&fw.0],
+        Stalled::Cell => vec![&run.0],
+        Stalled::Both => vec![&fw.0, &run.0],
     };
-    let pid = Pid::from_child(child);
+    let pids: Vec<Pid> = children.into_iter().map(Pid::from_child).collect();
     let stopped = now_ns();
-    kill_process(pid, Signal::STOP).expect("SIGSTOP");
+    for &pid in &pids {
+        kill_process(pid, Signal::STOP).expect("SIGSTOP");
+    }
     std::thread::sleep(Duration::from_millis(ms));
-    kill_process(pid, Signal::CONT).expect("SIGCONT");
+    for &pid in &pids {
+        kill_process(pid, Signal::CONT).expect("SIGCONT");
+    }
     run.wait_for(Duration::from_secs(60));
     std::thread::sleep(Duration::from_millis(1500));
     let (setpoints, states) = watch.finish();
@@ -537,7 +544,10 @@ fn last_seq_named(fault: &str) -> u64 {
 /// cycles it coasted). Longer stalls stop the arm: a silent controller is a fault of the cell
 /// after 100 ms (it sends nothing more); a silent cell trips the controller's watchdog after
 /// 100 cycles; either way the controller brakes to rest within the limits, and the setpoints
-/// that did arrive are consecutive (none lost) and within the limits.
+/// that did arrive are consecutive (none lost) and within the limits. Both stopped together
+/// for 200 ms (the host froze, as a CI machine once did for 112 ms) is ridden through: each
+/// process counts silence only while it runs, so neither blames the other; the cell reports
+/// its own stall.
 #[test]
 fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
@@ -546,97 +556,106 @@ fn stalls_of_either_process_are_ridden_through_or_stop_the_arm_within_limits() {
     println!(
         "stalled   ms  outcome                                   detected   setpoints  lost  peak ratio (v, a, j)"
     );
-    for who in [Stalled::Firmware, Stalled::Cell] {
-        for ms in [20, 200, 2000] {
-            let s = stall(who, ms);
-            let r = &s.report;
-            // Every setpoint that reached the topic: 1, 2, 3, … and within the limits.
-            for (i, sp) in s.setpoints.iter().enumerate() {
-                assert_eq!(sp.seq, i as u64 + 1, "{who:?} {ms} ms: sequence");
-            }
-            assert_eq!(r["lost"], 0, "{who:?} {ms} ms: {r}");
-            let q: Vec<[f64; NA]> = s.setpoints.iter().map(|m| m.q).collect();
-            let ratios = open_end_ratios(&q, &limits);
+    let cases = [Stalled::Firmware, Stalled::Cell]
+        .into_iter()
+        .flat_map(|who| [20, 200, 2000].map(|ms| (who, ms)))
+        .chain([(Stalled::Both, 200)]);
+    for (who, ms) in cases {
+        let s = stall(who, ms);
+        let r = &s.report;
+        // Every setpoint that reached the topic: 1, 2, 3, … and within the limits.
+        for (i, sp) in s.setpoints.iter().enumerate() {
+            assert_eq!(sp.seq, i as u64 + 1, "{who:?} {ms} ms: sequence");
+        }
+        assert_eq!(r["lost"], 0, "{who:?} {ms} ms: {r}");
+        let q: Vec<[f64; NA]> = s.setpoints.iter().map(|m| m.q).collect();
+        let ratios = open_end_ratios(&q, &limits);
+        assert!(
+            ratios.iter().all(|x| *x <= 1.0 + 1e-9),
+            "{who:?} {ms} ms: {ratios:?}"
+        );
+        // (A 20 ms stop is on the border of what the cell calls its own stall.)
+        if who != Stalled::Firmware && ms > 20 {
+            let longest = r["longest_own_stall_ms"].as_f64().unwrap();
             assert!(
-                ratios.iter().all(|x| *x <= 1.0 + 1e-9),
-                "{who:?} {ms} ms: {ratios:?}"
-            );
-            let (outcome, detected) = if ms < 100 {
-                assert!(r["fault"].is_null(), "{who:?} {ms} ms: {r}");
-                assert_eq!(r["stopped"], true, "{r}");
-                let track = r["max_tracking_error"].as_f64().unwrap();
-                assert!(track <= 1e-2, "{who:?} {ms} ms: tracking {track} rad");
-                (
-                    format!("ridden through, tracking {:.2} mrad", track * 1e3),
-                    String::new(),
-                )
-            } else {
-                let fault = r["fault"].as_str().unwrap_or_else(|| panic!("{r}"));
-                let detected_ms = match who {
-                    Stalled::Firmware => {
-                        assert!(fault.contains("firmware-sim silent"), "{fault}");
-                        // The silence runs from the last joint state the cell took, which
-                        // its fault names ("last seq N"). Not the last one stamped before
-                        // the fault: a state stamped just before SIGSTOP is published after
-                        // SIGCONT, and the cell drops it as stale.
-                        let at = r["fault_t_ns"].as_u64().unwrap();
-                        let seq = last_seq_named(fault);
-                        let last = s
-                            .states
-                            .iter()
-                            .find(|m| m.seq == seq)
-                            .unwrap_or_else(|| panic!("joint state {seq} named by {fault}"))
-                            .t_ns;
-                        (at - last) as f64 * 1e-6
-                    }
-                    Stalled::Cell => {
-                        assert!(fault.contains("watchdog"), "{fault}");
-                        // The watchdog counts from the last setpoint it applied, which the
-                        // trip's state names. Not the last one stamped before the trip: a
-                        // setpoint stamped just before SIGSTOP is published after SIGCONT.
-                        let trip = s
-                            .states
-                            .iter()
-                            .find(|m| m.t_ns > s.stopped && m.status & status::WATCHDOG != 0)
-                            .expect("watchdog trip");
-                        let last = s
-                            .setpoints
-                            .iter()
-                            .find(|m| m.seq == trip.setpoint_seq)
-                            .unwrap_or_else(|| {
-                                panic!("setpoint {} before the trip", trip.setpoint_seq)
-                            })
-                            .t_ns;
-                        (trip.t_ns - last) as f64 * 1e-6
-                    }
-                };
-                assert!(
-                    (100.0..=150.0).contains(&detected_ms),
-                    "{who:?} {ms} ms: detected after {detected_ms} ms"
-                );
-                let peak = assert_brakes_to_rest(&s.states, s.stopped, &model);
-                let what = match who {
-                    Stalled::Firmware => "cell faults: controller silent",
-                    Stalled::Cell => "watchdog",
-                };
-                (
-                    format!("{what}; braked from {peak:.2} rad/s"),
-                    format!("{detected_ms:.1} ms"),
-                )
-            };
-            println!(
-                "{:<9} {:>4}  {:<45} {:>8} {:>10} {:>5}  {:.3} {:.3} {:.3}",
-                format!("{who:?}"),
-                ms,
-                outcome,
-                detected,
-                s.setpoints.len(),
-                r["lost"],
-                ratios[0],
-                ratios[1],
-                ratios[2]
+                r_u64(r, "own_stalls") >= 1 && longest >= 0.9 * ms as f64,
+                "{who:?} {ms} ms: the cell's own stall not reported: {r}"
             );
         }
+        let (outcome, detected) = if ms < 100 || who == Stalled::Both {
+            assert!(r["fault"].is_null(), "{who:?} {ms} ms: {r}");
+            assert_eq!(r["stopped"], true, "{r}");
+            let track = r["max_tracking_error"].as_f64().unwrap();
+            assert!(track <= 1e-2, "{who:?} {ms} ms: tracking {track} rad");
+            (
+                format!("ridden through, tracking {:.2} mrad", track * 1e3),
+                String::new(),
+            )
+        } else {
+            let fault = r["fault"].as_str().unwrap_or_else(|| panic!("{r}"));
+            let detected_ms = match who {
+                Stalled::Firmware => {
+                    assert!(fault.contains("firmware-sim silent"), "{fault}");
+                    // The silence runs from the last joint state the cell took, which
+                    // its fault names ("last seq N"). Not the last one stamped before
+                    // the fault: a state stamped just before SIGSTOP is published after
+                    // SIGCONT, and the cell drops it as stale.
+                    let at = r["fault_t_ns"].as_u64().unwrap();
+                    let seq = last_seq_named(fault);
+                    let last = s
+                        .states
+                        .iter()
+                        .find(|m| m.seq == seq)
+                        .unwrap_or_else(|| panic!("joint state {seq} named by {fault}"))
+                        .t_ns;
+                    (at - last) as f64 * 1e-6
+                }
+                Stalled::Both => unreachable!("ridden through"),
+                Stalled::Cell => {
+                    assert!(fault.contains("watchdog"), "{fault}");
+                    // The watchdog counts from the last setpoint it applied, which the
+                    // trip's state names. Not the last one stamped before the trip: a
+                    // setpoint stamped just before SIGSTOP is published after SIGCONT.
+                    let trip = s
+                        .states
+                        .iter()
+                        .find(|m| m.t_ns > s.stopped && m.status & status::WATCHDOG != 0)
+                        .expect("watchdog trip");
+                    let last = s
+                        .setpoints
+                        .iter()
+                        .find(|m| m.seq == trip.setpoint_seq)
+                        .unwrap_or_else(|| panic!("setpoint {} before the trip", trip.setpoint_seq))
+                        .t_ns;
+                    (trip.t_ns - last) as f64 * 1e-6
+                }
+            };
+            assert!(
+                (100.0..=150.0).contains(&detected_ms),
+                "{who:?} {ms} ms: detected after {detected_ms} ms"
+            );
+            let peak = assert_brakes_to_rest(&s.states, s.stopped, &model);
+            let what = match who {
+                Stalled::Firmware => "cell faults: controller silent",
+                Stalled::Cell | Stalled::Both => "watchdog",
+            };
+            (
+                format!("{what}; braked from {peak:.2} rad/s"),
+                format!("{detected_ms:.1} ms"),
+            )
+        };
+        println!(
+            "{:<9} {:>4}  {:<45} {:>8} {:>10} {:>5}  {:.3} {:.3} {:.3}",
+            format!("{who:?}"),
+            ms,
+            outcome,
+            detected,
+            s.setpoints.len(),
+            r["lost"],
+            ratios[0],
+            ratios[1],
+            ratios[2]
+        );
     }
 }
 

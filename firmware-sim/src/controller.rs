@@ -3,7 +3,10 @@
 //! none, the reference coasts at its last velocity. Setpoints that arrive late, for cycles the
 //! reference already coasted through, replace that extrapolation without a further cycle, so
 //! the plant never runs ahead of the wall clock. After `watchdog_cycles` silent cycles
-//! the arm and the platform brake to standstill with Ruckig. Every cycle publishes the
+//! the arm and the platform brake to standstill with Ruckig. Cycles are counted as they run:
+//! when the process itself stalls (more than ten periods late), the cycle resynchronises and
+//! the stall is logged, not counted as the cell's silence — a real controller does not stall,
+//! and on a shared host the cell was stopped too. Every cycle publishes the
 //! measured state. A refused setpoint also brakes; the next session (flag FIRST) clears it.
 
 use crate::guard::{Admission, Guard};
@@ -239,6 +242,9 @@ pub struct Summary {
     pub repeated: u64,
     pub rejected: u64,
     pub watchdog_trips: u32,
+    /// Times this process's own cycle came more than ten periods late with no setpoint
+    /// waiting, and resynchronised.
+    pub own_stalls: u32,
     pub max_tracking_error: f64,
     /// Drives on the floor map, and the smallest clearance any of them kept, m.
     pub drives: u32,
@@ -280,7 +286,8 @@ struct Controller<'c> {
     /// Watchdog or refusal: latched (setpoints ignored, arm braked) until the next FIRST.
     halted: bool,
     state_bits: u32,
-    last_setpoint: Instant,
+    /// Cycles run without a setpoint since the last one (the watchdog's count).
+    silent_cycles: u32,
     js_seq: u64,
     window_error: f64,
     window_latency: u64,
@@ -321,7 +328,7 @@ impl<'c> Controller<'c> {
             active: false,
             halted: false,
             state_bits: 0,
-            last_setpoint: Instant::now(),
+            silent_cycles: 0,
             js_seq: 0,
             window_error: 0.0,
             window_latency: 0,
@@ -410,9 +417,9 @@ impl<'c> Controller<'c> {
         Ok(())
     }
 
-    /// One cycle driven by setpoint `sp`, received at `now`: session bookkeeping, admission,
-    /// one plant step, publish.
-    fn on_setpoint(&mut self, sp: SetpointMsg, now: Instant) -> Result<Flow> {
+    /// One cycle driven by setpoint `sp`: session bookkeeping, admission, one plant step,
+    /// publish.
+    fn on_setpoint(&mut self, sp: SetpointMsg) -> Result<Flow> {
         let latency = now_ns().saturating_sub(sp.t_ns);
         if sp.flags & flags::SHUTDOWN != 0 {
             self.event(format_args!("shutdown requested"))?;
@@ -445,7 +452,7 @@ impl<'c> Controller<'c> {
             self.window_error = self.window_error.max(self.plant.tracking_error());
             self.publish(sp.seq, latency)?;
         }
-        self.last_setpoint = now;
+        self.silent_cycles = 0;
         if sp.flags & flags::LAST != 0 {
             self.end_session(sp.seq)?;
         }
@@ -503,13 +510,13 @@ impl<'c> Controller<'c> {
 
     /// A cycle without a setpoint: the reference coasts, or after `watchdog_cycles` the
     /// watchdog brakes; one plant step; publish.
-    fn on_silence(&mut self, now: Instant) -> Result<()> {
+    fn on_silence(&mut self) -> Result<()> {
         if self.active && !self.halted {
-            let silent = (now - self.last_setpoint).as_secs_f64() / DT;
-            if silent >= self.cfg.watchdog_cycles as f64 {
-                let seq = self.last_sp_seq;
+            self.silent_cycles = self.silent_cycles.saturating_add(1);
+            if self.silent_cycles >= self.cfg.watchdog_cycles {
+                let (n, seq) = (self.silent_cycles, self.last_sp_seq);
                 self.event(format_args!(
-                    "watchdog: no setpoint for {silent:.1} ms after seq {seq}; braking"
+                    "watchdog: no setpoint for {n} cycles after seq {seq}; braking"
                 ))?;
                 self.summary.watchdog_trips += 1;
                 self.halted = true;
@@ -525,6 +532,17 @@ impl<'c> Controller<'c> {
             self.event(format_args!("standstill"))?;
         }
         self.publish(self.last_sp_seq, self.last_latency)
+    }
+
+    /// The process itself stalled: its cycle came `late` (more than ten periods) and
+    /// resynchronises. Logged and counted; the missed cycles are not run, so neither the plant
+    /// nor the watchdog counts them.
+    fn own_stall(&mut self, late: Duration) -> Result<()> {
+        self.summary.own_stalls += 1;
+        self.event(format_args!(
+            "own cycle {:.1} ms late (this process or the host stalled): resynchronised, the missed cycles not run",
+            late.as_secs_f64() * 1e3
+        ))
     }
 
     /// The exit line of the log; the summary.
@@ -557,6 +575,9 @@ impl std::fmt::Display for Summary {
                 self.drives,
                 self.min_drive_clearance * 1e3
             )?;
+        }
+        if self.own_stalls > 0 {
+            write!(f, ", own stalls {}", self.own_stalls)?;
         }
         Ok(())
     }
@@ -608,7 +629,7 @@ pub fn run(cfg: &Config) -> Result<Summary> {
         {
             let sp = *sample;
             drop(sample);
-            match c.on_setpoint(sp, Instant::now())? {
+            match c.on_setpoint(sp)? {
                 Flow::Exit => break 'cycle,
                 Flow::Stepped => stepped = true,
                 Flow::CaughtUp => caught_up = true,
@@ -627,8 +648,9 @@ pub fn run(cfg: &Config) -> Result<Summary> {
         if now < next {
             continue;
         }
-        c.on_silence(now)?;
+        c.on_silence()?;
         next = if now > next + period * 10 {
+            c.own_stall(now - next)?;
             now + period
         } else {
             next + period
@@ -652,29 +674,23 @@ pub enum Input {
 }
 
 /// The controller's cycles on `inputs`, without shared memory or a wall clock (for fuzzing
-/// and tests): a setpoint arrives on time, and a silent input is one period later than the
-/// input before it. Every published state goes to `sink`; the log is discarded. Ends at the
-/// last input or at a SHUTDOWN setpoint.
+/// and tests): one cycle per input, a setpoint or a period without one. Every published
+/// state goes to `sink`; the log is discarded. Ends at the last input or at a SHUTDOWN
+/// setpoint.
 pub fn replay(
     cfg: &Config,
     inputs: impl IntoIterator<Item = Input>,
     sink: &dyn StateSink,
 ) -> Result<Summary> {
     let mut c = Controller::new(cfg, sink, Box::new(std::io::sink()))?;
-    let period = Duration::from_millis(1);
-    let mut now = c.start;
     for input in inputs {
         match input {
             Input::Setpoint(sp) => {
-                if let Flow::Exit = c.on_setpoint(sp, now)? {
+                if let Flow::Exit = c.on_setpoint(sp)? {
                     break;
                 }
-                now += period;
             }
-            Input::Silence => {
-                c.on_silence(now)?;
-                now += period;
-            }
+            Input::Silence => c.on_silence()?,
         }
     }
     c.finish()
@@ -761,5 +777,47 @@ mod tests {
                 b[j]
             );
         }
+    }
+
+    /// Published states, kept.
+    struct Kept(std::cell::RefCell<Vec<JointStateMsg>>);
+
+    impl StateSink for Kept {
+        fn publish(&self, msg: JointStateMsg) -> Result<()> {
+            self.0.borrow_mut().push(msg);
+            Ok(())
+        }
+    }
+
+    /// The watchdog counts the silent cycles the controller runs, and a setpoint restarts
+    /// the count: 99 silent cycles, a setpoint, 99 more hold; the 100th in a row brakes.
+    #[test]
+    fn the_watchdog_trips_on_the_hundredth_silent_cycle_run() {
+        let cfg = Config::new("test");
+        assert_eq!(cfg.watchdog_cycles, 100);
+        let home = RobotModel::kmr_iiwa14().home;
+        let first = SetpointMsg {
+            flags: flags::FIRST,
+            ..setpoint(&home, 1)
+        };
+        let silent = |n| std::iter::repeat_n(Input::Silence, n);
+        let inputs = std::iter::once(Input::Setpoint(first))
+            .chain(silent(99))
+            .chain([Input::Setpoint(setpoint(&home, 2))])
+            .chain(silent(100));
+        let kept = Kept(Default::default());
+        let summary = replay(&cfg, inputs, &kept).unwrap();
+        let states = kept.0.into_inner();
+        // The second setpoint comes after coasted cycles: it replaces one and steps nothing.
+        assert_eq!(states.len(), 200);
+        let tripped: Vec<usize> = (0..states.len())
+            .filter(|&i| states[i].status & status::WATCHDOG != 0)
+            .collect();
+        assert_eq!(
+            tripped.first(),
+            Some(&199),
+            "the 100th silent cycle after seq 2"
+        );
+        assert_eq!(summary.watchdog_trips, 1);
     }
 }

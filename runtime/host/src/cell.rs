@@ -9,6 +9,7 @@
 //! (a setpoint published after its 1 ms period ended) are counted, never hidden.
 
 use crate::liveness::Liveness;
+use crate::stall::{self, Silence};
 use crate::{pacing, realtime, stats};
 use embassy_time::{Duration, Instant, Ticker};
 use prf_ipc::clock::now_ns;
@@ -57,8 +58,9 @@ pub struct CellConfig {
     /// controller's process is alive, and stops with a fault if it is not.
     pub dead_after_ms: f64,
     /// Milliseconds without a fresh joint state after which the cell stops with a fault even
-    /// though the controller's process is alive. A joint state stamped more than this before
-    /// (or after) it arrives is stale: it is counted and not used.
+    /// though the controller's process is alive, counted while the cell listened (its own
+    /// stalls are not the controller's silence: [`crate::stall`]). A joint state stamped
+    /// more than this before (or after) it arrives is stale: it is counted and not used.
     pub silent_after_ms: f64,
     /// How long to wait for the controller's first joint state.
     pub connect_timeout: std::time::Duration,
@@ -114,6 +116,13 @@ pub struct CellReport {
     pub stale_states: u64,
     /// Setpoints published after the end of their 1 ms period.
     pub deadline_misses: u64,
+    /// The loop's own stalls (gaps between its polls longer than
+    /// [`crate::stall::OWN_STALL`]: its process or the host stopped), and the longest, ms.
+    pub own_stalls: u64,
+    pub longest_own_stall_ms: f64,
+    /// Ticks skipped after the loop's own stalls because the controller was stopped too
+    /// ([`crate::stall::ticks_to_skip`]): neither the stream nor the controller moved.
+    pub skipped_ticks: u64,
     /// Wake-up lateness after the scheduled tick, µs: p50, p99, p99.9, max.
     pub wake_late_us: [f64; 4],
     /// Setpoint one-way latency cell → controller, µs: p50, p99, p99.9, max.
@@ -153,6 +162,14 @@ impl CellReport {
         let drives = self.min_drive_clearance.map_or(String::new(), |c| {
             format!(", drives kept ≥ {:.1} mm from every obstacle", c * 1e3)
         });
+        let stalls = if self.own_stalls > 0 {
+            format!(
+                ", the loop itself stalled {} times (longest {:.1} ms; {} ticks skipped with the controller, stopped too)",
+                self.own_stalls, self.longest_own_stall_ms, self.skipped_ticks
+            )
+        } else {
+            String::new()
+        };
         let allocations = self.loop_allocations.map_or(String::new(), |n| {
             format!(
                 ", {n} allocations in the loop ({:.2} per tick)",
@@ -160,7 +177,7 @@ impl CellReport {
             )
         });
         format!(
-            "{:.1} s, emitted at {:.3} of the limits (acceleration {:.3}, jerk {:.3}), {} ticks shaped (max {:.2} mrad), max tracking error {:.2} mrad, lost {}, repeated {}, refused {}, deadline misses {}, wake-up late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, setpoint latency p50 {:.1} µs p99 {:.1} µs max {:.0} µs{}{}",
+            "{:.1} s, emitted at {:.3} of the limits (acceleration {:.3}, jerk {:.3}), {} ticks shaped (max {:.2} mrad), max tracking error {:.2} mrad, lost {}, repeated {}, refused {}, deadline misses {}, wake-up late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, setpoint latency p50 {:.1} µs p99 {:.1} µs max {:.0} µs{}{}{}",
             self.duration_s,
             self.emitted.max(),
             self.emitted.acceleration,
@@ -179,6 +196,7 @@ impl CellReport {
             self.latency_us[1],
             self.latency_us[3],
             drives,
+            stalls,
             allocations
         )
     }
@@ -348,7 +366,7 @@ impl Cell {
             None => format!("{}; normal scheduling", self.cfg.wait),
         };
         (self.stale, self.stale_ms) = (0, 0.0);
-        let mut last_rx = std::time::Instant::now();
+        let mut silence = Silence::new(std::time::Instant::now());
         let mut asked = None;
         let mut seen_sp = 0u64;
         // A joint state of this session: stamped after it began and acknowledging one of its
@@ -361,17 +379,33 @@ impl Cell {
         let mut ticker = Ticker::every(period);
         let probe = self.cfg.alloc_probe;
         let allocations_before = probe.map(|f| f());
-        let t0 = Instant::now();
+        // The schedule's origin: moved on by the ticks skipped with a stopped controller.
+        let mut t0 = Instant::now();
         let mut k = 0u64;
         loop {
             parker.block_on(ticker.next());
             k += 1;
             let scheduled = t0 + period * k as u32;
             let woke = Instant::now();
-            timing.late(woke.saturating_duration_since(scheduled).as_micros() as f64);
-            if self.receive()? {
-                last_rx = std::time::Instant::now();
+            let late = woke.saturating_duration_since(scheduled);
+            timing.late(late.as_micros() as f64);
+            let cycles_before = self.last.seq;
+            let fresh = self.receive()?;
+            let silent = silence.poll(std::time::Instant::now(), fresh);
+            if fresh {
                 asked = None;
+            }
+            // After the cell's own stall, the ticks a stopped controller did not run are
+            // skipped, not burst out (crate::stall).
+            if silence.after_stall() {
+                let missed = late.as_ticks() / period.as_ticks();
+                let cycles = self.last.seq.saturating_sub(cycles_before);
+                let skip = stall::ticks_to_skip(missed, cycles);
+                if skip > 0 {
+                    t0 += period * skip as u32;
+                    ticker.reset_at(t0 + period * k as u32);
+                    report.skipped_ticks += skip;
+                }
             }
             let js = self.last;
             acknowledged |= js.t_ns >= begun && (1..=k).contains(&js.setpoint_seq);
@@ -387,12 +421,9 @@ impl Cell {
                     (js.lost, js.repeated, js.rejected);
             }
             // Silence in wall time, not ticks: after a late wake-up the ticker catches up with
-            // ticks in quick succession, faster than the controller answers.
-            if let Some(why) = self.controller_stop(
-                last_rx.elapsed().as_secs_f64() * 1e3,
-                &mut asked,
-                acknowledged,
-            ) {
+            // ticks in quick succession, faster than the controller answers. The cell's own
+            // stalls are not counted (crate::stall).
+            if let Some(why) = self.controller_stop(&silence, silent, &mut asked, acknowledged) {
                 // No controller to brake with: nothing more is sent.
                 report.fault = Some(why);
                 report.fault_t_ns = Some(now_ns());
@@ -426,6 +457,9 @@ impl Cell {
         drop(realtime);
         report.ticks = k;
         report.stale_states = self.stale;
+        let (stalls, longest) = silence.own_stalls();
+        report.own_stalls = stalls;
+        report.longest_own_stall_ms = longest.as_secs_f64() * 1e3;
         report.duration_s = k as f64 * 1e-3;
         (report.shaped, report.max_shaping) = stage.shaped();
         report.emitted = stage.ratios();
@@ -449,19 +483,22 @@ impl Cell {
         Ok(true)
     }
 
-    /// Why the controller can no longer be commanded, after `silent` ms without a joint state:
-    /// it is dead or silent, or it stopped the arm itself (watchdog, refused setpoint).
+    /// Why the controller can no longer be commanded, after `silent` without a joint state
+    /// while the cell listened ([`Silence`]): it is dead or silent, or it stopped the arm
+    /// itself (watchdog, refused setpoint).
     /// Its process having exited stops the cell at once ([`Liveness::exited`]); without a
     /// pidfd, after `dead_after_ms` of silence the liveness helper is asked once (`asked`
     /// holds the question until a joint state comes), and its answer "dead" stops the cell.
     /// Its stop flags count once it has `acknowledged` this session.
     fn controller_stop(
         &self,
-        silent: f64,
+        silence: &Silence,
+        silent: std::time::Duration,
         asked: &mut Option<u64>,
         acknowledged: bool,
     ) -> Option<String> {
         let js = &self.last;
+        let silent = silent.as_secs_f64() * 1e3;
         let dead = self.liveness.exited()
             || silent >= self.cfg.silent_after_ms
             || (silent >= self.cfg.dead_after_ms && {
@@ -477,8 +514,17 @@ impl Cell {
             } else {
                 String::new()
             };
+            let unheard = silence.unheard();
+            let unheard = if unheard.is_zero() {
+                String::new()
+            } else {
+                format!(
+                    "; the cell's own stalls since then, {:.1} ms, not counted",
+                    unheard.as_secs_f64() * 1e3
+                )
+            };
             Some(format!(
-                "firmware-sim {}: no fresh joint state for {silent:.1} ms (last seq {}{stale})",
+                "firmware-sim {}: no fresh joint state for {silent:.1} ms (last seq {}{stale}{unheard})",
                 if silent >= self.cfg.silent_after_ms {
                     "silent"
                 } else {
