@@ -391,7 +391,7 @@ impl Cell {
             timing.late(late.as_micros() as f64);
             let cycles_before = self.last.seq;
             let fresh = self.receive()?;
-            let silent = silence.poll(std::time::Instant::now(), fresh);
+            silence.poll(std::time::Instant::now(), fresh);
             if fresh {
                 asked = None;
             }
@@ -423,7 +423,7 @@ impl Cell {
             // Silence in wall time, not ticks: after a late wake-up the ticker catches up with
             // ticks in quick succession, faster than the controller answers. The cell's own
             // stalls are not counted (crate::stall).
-            if let Some(why) = self.controller_stop(&silence, silent, &mut asked, acknowledged) {
+            if let Some(why) = self.controller_stop(&silence, &mut asked, acknowledged) {
                 // No controller to brake with: nothing more is sent.
                 report.fault = Some(why);
                 report.fault_t_ns = Some(now_ns());
@@ -483,8 +483,8 @@ impl Cell {
         Ok(true)
     }
 
-    /// Why the controller can no longer be commanded, after `silent` without a joint state
-    /// while the cell listened ([`Silence`]): it is dead or silent, or it stopped the arm
+    /// Why the controller can no longer be commanded, after its `silence` (without a joint
+    /// state while the cell listened): it is dead or silent, or it stopped the arm
     /// itself (watchdog, refused setpoint).
     /// Its process having exited stops the cell at once ([`Liveness::exited`]); without a
     /// pidfd, after `dead_after_ms` of silence the liveness helper is asked once (`asked`
@@ -493,12 +493,11 @@ impl Cell {
     fn controller_stop(
         &self,
         silence: &Silence,
-        silent: std::time::Duration,
         asked: &mut Option<u64>,
         acknowledged: bool,
     ) -> Option<String> {
         let js = &self.last;
-        let silent = silent.as_secs_f64() * 1e3;
+        let silent = silence.listened().as_secs_f64() * 1e3;
         let dead = self.liveness.exited()
             || silent >= self.cfg.silent_after_ms
             || (silent >= self.cfg.dead_after_ms && {

@@ -67,6 +67,11 @@ impl Silence {
         self.listened
     }
 
+    /// How long the controller has been silent while the cell listened, as of the last poll.
+    pub fn listened(&self) -> Duration {
+        self.listened
+    }
+
     /// The last poll came after the cell's own stall.
     pub fn after_stall(&self) -> bool {
         self.after_stall
