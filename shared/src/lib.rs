@@ -16,7 +16,7 @@
 //!   that rates a joint stream against them;
 //! - [`timing`]: an RDMP motion timed within the limits (time scaling of τ, settling to rest);
 //! - [`profile`], [`linalg`], [`float`]: small helpers (time scaling, fixed-size solvers, the
-//!   square root at each platform's speed with the same bits).
+//!   square root and e^{−x} at each platform's speed with the same bits).
 //!
 //! Section, equation and algorithm numbers refer to Toner, Tilbury, Barton, "PRF: A Program
 //! Reuse Framework for Automated Programming by Learning from Existing Robot Programs",

@@ -45,8 +45,12 @@ pub struct JacobianQr {
 }
 
 impl JacobianQr {
-    /// The QR of Jᵀ: the six Householder steps unrolled for the 7 × 6 shape
-    /// (`reflect`); the same operations in the same order as [`JacobianQr::new_looped`].
+    /// The QR of Jᵀ: the six Householder steps unrolled for the 7 × 6 shape (`reflect`),
+    /// with short dependency chains: dot products summed pairwise, β = 2/vᵀv taken as
+    /// 1/(‖a_k‖(‖a_k‖ + |a_kk|)) from the column's norm (no second sum), and the products
+    /// vᵀc = a_kᵀc − α c_k of the other columns summed before α is known. The same
+    /// factorisation as [`JacobianQr::new_looped`] to rounding (test
+    /// `the_step_qr_agrees_with_the_previous_one`).
     pub fn new(j: &Jacobian) -> Self {
         // a = Jᵀ, column-major by construction: a[c][row] is Jᵀ(row, c) = J(c, row).
         let mut a = [[0.0; 7]; 6];
@@ -70,8 +74,9 @@ impl JacobianQr {
         qr
     }
 
-    /// [`JacobianQr::new`] as generic loops: the previous implementation, kept as the
-    /// benchmark's baseline (`prf bench`); the same factorisation bit for bit.
+    /// The QR of Jᵀ as generic loops, each sum in index order and vᵀv summed again: the
+    /// previous implementation, kept as the benchmark's baseline (`prf bench`) and the
+    /// tests' reference for [`JacobianQr::new`].
     pub fn new_looped(j: &Jacobian) -> Self {
         // a = Jᵀ, column-major by construction: a[c][row] is Jᵀ(row, c) = J(c, row).
         let mut a = [[0.0; 7]; 6];
@@ -111,15 +116,12 @@ impl JacobianQr {
 
     /// y ← Q y = H_0 ⋯ H_5 y.
     fn apply_q(&self, y: &mut [f64; 7]) {
-        for k in (0..6).rev() {
-            if self.beta[k] != 0.0 {
-                let vk = &self.v[k];
-                let s = self.beta[k] * (k..7).map(|i| vk[i] * y[i]).sum::<f64>();
-                for i in k..7 {
-                    y[i] -= s * vk[i];
-                }
-            }
-        }
+        reflect_one::<5>(self, y);
+        reflect_one::<4>(self, y);
+        reflect_one::<3>(self, y);
+        reflect_one::<2>(self, y);
+        reflect_one::<1>(self, y);
+        reflect_one::<0>(self, y);
     }
 
     /// det R = ± sqrt(det(J Jᵀ)).
@@ -157,10 +159,12 @@ impl JacobianQr {
         finite(y)
     }
 
-    /// [R⁻ᵀV; 0] by forward substitution; `None` if a diagonal entry of R is below
+    /// [R⁻ᵀV; 0] by forward substitution, multiplying by the diagonal's reciprocals (taken
+    /// up front, off the substitution's chain); `None` if a diagonal entry of R is below
     /// [`RANK_TOLERANCE`] × the largest one.
     fn r_inv_t(&self, v: &Vector6<f64>) -> Option<[f64; 7]> {
         let scale = (0..6).map(|k| f64::abs(self.r[k][k])).fold(0.0, f64::max);
+        let inv: [f64; 6] = core::array::from_fn(|k| 1.0 / self.r[k][k]);
         let mut y = [0.0; 7];
         for i in 0..6 {
             let d = self.r[i][i];
@@ -168,7 +172,7 @@ impl JacobianQr {
                 return None;
             }
             let s: f64 = (0..i).map(|k| self.r[k][i] * y[k]).sum();
-            y[i] = (v[i] - s) / d;
+            y[i] = (v[i] - s) * inv[i];
         }
         Some(y)
     }
@@ -183,53 +187,76 @@ fn finite(y: [f64; 7]) -> Option<JointVector> {
     out.iter().all(|x| x.is_finite()).then_some(out)
 }
 
-/// Σ_{i ≥ K} a_i b_i, summed in index order (the first product is the start: the same
-/// bits as a sum from −0).
-#[inline(always)]
-fn dot_from<const K: usize>(a: &[f64; 7], b: &[f64; 7]) -> f64 {
-    let mut s = a[K] * b[K];
-    for i in K + 1..7 {
-        s += a[i] * b[i];
-    }
-    s
-}
-
 /// Householder step K of [`JacobianQr::new`] on the remaining columns of `a`, with the loop
-/// bounds known at compile time.
+/// bounds known at compile time. H_K = I − β v vᵀ with v = a_K − α e_K, α = −sign(a_KK)‖a_K‖
+/// (rows K..7), so vᵀv = 2‖a_K‖(‖a_K‖ + |a_KK|).
 #[inline(always)]
 fn reflect<const K: usize>(a: &mut [[f64; 7]; 6], qr: &mut JacobianQr) {
-    let norm = crate::float::sqrt(dot_from::<K>(&a[K], &a[K]));
-    let alpha = if a[K][K] >= 0.0 { -norm } else { norm };
+    let mut d = [0.0; 6];
+    for c in K + 1..6 {
+        d[c] = dot_tree::<K>(&a[K], &a[c]);
+    }
+    let norm = crate::float::sqrt(dot_tree::<K>(&a[K], &a[K]));
+    let akk = a[K][K];
+    let alpha = if akk >= 0.0 { -norm } else { norm };
     let mut vk = [0.0; 7];
     vk[K..].copy_from_slice(&a[K][K..]);
     vk[K] -= alpha;
-    let vv = dot_from::<K>(&vk, &vk);
-    if vv > 0.0 {
-        let beta = 2.0 / vv;
+    if norm > 0.0 {
+        let beta = 1.0 / (norm * (norm + f64::abs(akk)));
         qr.beta[K] = beta;
         qr.det_q = -qr.det_q;
-        for col in a.iter_mut().skip(K + 1) {
-            let s = beta * dot_from::<K>(&vk, col);
+        for c in K + 1..6 {
+            let col = &mut a[c];
+            let s = beta * (d[c] - alpha * col[K]);
             for i in K..7 {
                 col[i] -= s * vk[i];
             }
         }
     }
-    qr.r[K][K] = if vv > 0.0 { alpha } else { a[K][K] };
+    qr.r[K][K] = if norm > 0.0 { alpha } else { akk };
     for c in (K + 1)..6 {
         qr.r[K][c] = a[c][K];
     }
     qr.v[K] = vk;
 }
 
-/// Reflection K of Q applied to two vectors at once (each as in [`JacobianQr::apply_q`]).
+/// Σ_{i ≥ K} a_i b_i summed pairwise (a tree of depth 3 at most).
+#[inline(always)]
+fn dot_tree<const K: usize>(a: &[f64; 7], b: &[f64; 7]) -> f64 {
+    let p = |i: usize| a[i] * b[i];
+    match K {
+        0 => ((p(0) + p(1)) + (p(2) + p(3))) + ((p(4) + p(5)) + p(6)),
+        1 => ((p(1) + p(2)) + (p(3) + p(4))) + (p(5) + p(6)),
+        2 => ((p(2) + p(3)) + (p(4) + p(5))) + p(6),
+        3 => (p(3) + p(4)) + (p(5) + p(6)),
+        4 => (p(4) + p(5)) + p(6),
+        5 => p(5) + p(6),
+        _ => p(6),
+    }
+}
+
+/// y ← H_K y, reflection K of Q (`apply_q`).
+#[inline(always)]
+fn reflect_one<const K: usize>(qr: &JacobianQr, y: &mut [f64; 7]) {
+    let beta = qr.beta[K];
+    if beta != 0.0 {
+        let vk = &qr.v[K];
+        let s = beta * dot_tree::<K>(vk, y);
+        for i in K..7 {
+            y[i] -= s * vk[i];
+        }
+    }
+}
+
+/// Reflection K of Q applied to two vectors at once (each as in [`reflect_one`]).
 #[inline(always)]
 fn reflect_pair<const K: usize>(qr: &JacobianQr, y: &mut [f64; 7], z: &mut [f64; 7]) {
     let beta = qr.beta[K];
     if beta != 0.0 {
         let vk = &qr.v[K];
-        let sy = beta * dot_from::<K>(vk, y);
-        let sz = beta * dot_from::<K>(vk, z);
+        let sy = beta * dot_tree::<K>(vk, y);
+        let sz = beta * dot_tree::<K>(vk, z);
         for i in K..7 {
             y[i] -= sy * vk[i];
             z[i] -= sz * vk[i];

@@ -70,10 +70,11 @@ pub fn log(r: &Rot) -> Vector3<f64> {
     log_angle(r).0
 }
 
-/// [`log`] and the angle θ it scaled the axis with (`None` on the series branch near the
-/// identity, where no angle was computed).
+/// [`log`] and the angle θ it scaled the axis with. Below [`SMALL_TAN2`] θ/s = 2 atan(t)/s,
+/// t = s/w, comes from its series in t² (no atan2; the square root for θ only, which [`log`]
+/// drops).
 #[inline(always)]
-fn log_angle(r: &Rot) -> (Vector3<f64>, Option<f64>) {
+fn log_angle(r: &Rot) -> (Vector3<f64>, f64) {
     let q = r.quaternion();
     // q and −q are the same rotation: take the representative with w ≥ 0, so θ ≤ π.
     let (w, v) = if q.w >= 0.0 {
@@ -81,26 +82,44 @@ fn log_angle(r: &Rot) -> (Vector3<f64>, Option<f64>) {
     } else {
         (-q.w, -q.imag())
     };
-    let s = norm(&v);
-    if s < 1e-12 {
-        // θ = 2·atan2(s, w) ≈ 2s/w; the series keeps full precision near the identity.
-        return (v * (2.0 / w), None);
+    let ss = v.norm_squared();
+    if ss < SMALL_TAN2 * w * w {
+        // 2 atan(t)/t = 2 Σ (−t²)ⁿ/(2n+1), to t⁸: at t ≤ 1/64 the next term, t¹⁰/11, is
+        // below 1e-19.
+        let inv = 1.0 / w;
+        let t2 = ss * inv * inv;
+        let series = 1.0 + t2 * (-1.0 / 3.0 + t2 * (0.2 + t2 * (-1.0 / 7.0 + t2 * (1.0 / 9.0))));
+        let k = 2.0 * inv * series;
+        return (v * k, k * crate::float::sqrt(ss));
     }
+    let s = crate::float::sqrt(ss);
     let theta = 2.0 * libm::atan2(s, w);
-    (v * (theta / s), Some(theta))
+    (v * (theta / s), theta)
 }
 
-/// SO(3) exponential of a rotation vector.
+/// tan²(θ/2) below which [`log`] takes its series: θ < 2 atan(1/64) ≈ 1.8°.
+const SMALL_TAN2: f64 = 1.0 / 4096.0;
+
+/// (θ/2)² below which [`exp`] takes its series: θ < 1/16 rad.
+const SMALL_HALF_ANGLE2: f64 = 1.0 / 1024.0;
+
+/// SO(3) exponential of a rotation vector θ·a: the quaternion (cos(θ/2), a sin(θ/2)).
 pub fn exp(v: &Vector3<f64>) -> Rot {
+    let x2 = 0.25 * v.norm_squared();
+    if x2 < SMALL_HALF_ANGLE2 {
+        // x = θ/2 < 1/32: cos x and sin(x)/(2x) by their series to x⁸ (the next terms are
+        // below 1e-22); no square root, sine, cosine or division. (The angles of a tick.)
+        let c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40320.0))));
+        let k = 0.5
+            * (1.0
+                + x2 * (-1.0 / 6.0
+                    + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362880.0)))));
+        return UnitQuaternion::new_unchecked(Quaternion::new(c, v.x * k, v.y * k, v.z * k));
+    }
     let theta = norm(v);
     let half = 0.5 * theta;
     let (s, c) = (libm::sin(half), libm::cos(half));
-    // sin(θ/2)/θ → 1/2 as θ → 0 (series to 4th order below 1e-4).
-    let k = if theta < 1e-4 {
-        0.5 - theta * theta / 48.0
-    } else {
-        s / theta
-    };
+    let k = s / theta;
     UnitQuaternion::new_unchecked(Quaternion::new(c, v.x * k, v.y * k, v.z * k))
 }
 
@@ -111,9 +130,10 @@ pub fn exp(v: &Vector3<f64>) -> Rot {
 /// this is what lets a rotation DMP reproduce motions with more than 180° of travel.
 pub fn log_near(r: &Rot, reference: &Vector3<f64>) -> Vector3<f64> {
     let (v, theta) = log_angle(r);
-    match theta {
-        Some(theta) if within_half_turn(&v, theta, reference) => v,
-        _ => unwrap_near(v, reference),
+    if within_half_turn(&v, theta, reference) {
+        v
+    } else {
+        unwrap_near(v, reference)
     }
 }
 
@@ -185,6 +205,45 @@ mod tests {
         }
     }
 
+    /// `exp` and `log` below their series thresholds (θ < 1/16 rad, θ < 1.8°) against the
+    /// closed forms with libm's sine, cosine and atan2: within 2 ε per component (exp) and
+    /// 4 ε of |v| (log); either side of the thresholds too.
+    #[test]
+    fn the_series_branches_agree_with_the_closed_forms() {
+        use rand::{RngExt, SeedableRng, rngs::StdRng};
+        let mut rng = StdRng::seed_from_u64(3);
+        for i in 0..100_000 {
+            let axis = Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0f64),
+            )
+            .normalize();
+            let theta = match i % 3 {
+                0 => rng.random_range(0.0..0.07),
+                1 => rng.random_range(0.0..1e-6),
+                _ => 2.0 * libm::atan(1.0 / 64.0) * rng.random_range(0.9..1.1),
+            };
+            let v = axis * theta;
+            let q = exp(&v);
+            let t = v.norm();
+            let (s, c) = (libm::sin(0.5 * t), libm::cos(0.5 * t));
+            let closed = Quaternion::new(c, v.x * s / t, v.y * s / t, v.z * s / t);
+            assert!(
+                (q.coords - closed.coords).amax() <= 2.0 * f64::EPSILON,
+                "exp({v:?})"
+            );
+            let (w, u) = (q.w, q.imag());
+            let sn = u.norm();
+            let closed = u * (2.0 * libm::atan2(sn, w) / sn);
+            let e = (log(&q) - closed).norm();
+            assert!(
+                e <= 4.0 * f64::EPSILON * closed.norm(),
+                "log of exp({v:?}): {e:e}"
+            );
+        }
+    }
+
     #[test]
     fn log_is_sign_independent() {
         let r = exp(&Vector3::new(0.2, 1.0, -0.4));
@@ -252,7 +311,7 @@ mod tests {
                     "angle {angle}, axis {axis:?}, reference {reference:?}"
                 );
                 let theta = log_angle(&r).1;
-                shortcut += usize::from(theta.is_some_and(|t| within_half_turn(&v, t, reference)));
+                shortcut += usize::from(within_half_turn(&v, theta, reference));
                 cases += 1;
             }
         }

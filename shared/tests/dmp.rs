@@ -318,8 +318,10 @@ fn phase_features_in_place_equal_fresh_evaluations() {
 /// Only the bases in ζ's window are tested: the features equal those from testing every
 /// basis, bit for bit, on a dense sweep of ζ, at each centre and at the edges where a basis
 /// turns on (h_i (ζ − c_i)² = 36: a few ulps and up to 1e-6 inside or out), for bases spread
-/// evenly (sorted windows, bisected), for two wide ones, and for bases whose windows reach
-/// below zero out of order (n_g 50, α_ζ 25: every basis tested).
+/// evenly (sorted windows, found by walking from the window the features held before: the
+/// sweep's previous ζ, a far one where the edge values jump about, NaN), for two wide ones,
+/// and for bases whose windows reach below zero out of order (n_g 50, α_ζ 25: every basis
+/// tested).
 #[test]
 fn features_from_the_window_equal_testing_every_basis() {
     use prf_shared::dmp::{Basis, Features};

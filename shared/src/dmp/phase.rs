@@ -13,7 +13,7 @@ const NEGLIGIBLE_EXPONENT: f64 = 36.0;
 
 /// A basis whose computed exponent h_i (ζ − c_i)² is at least this is skipped by a margin far
 /// above the exponent's rounding (four roundings, ~1e-15 relative): [`Basis::candidates`]
-/// bisects on it.
+/// finds the run's ends on it.
 const CLEARLY_NEGLIGIBLE: f64 = NEGLIGIBLE_EXPONENT * (1.0 + 1e-6);
 
 /// Centres and widths of the n_g Gaussian bases.
@@ -27,7 +27,7 @@ pub struct Basis {
     pub widths: [f64; MAX_BASES],
     /// True if both ends of the windows c_i ± √([`CLEARLY_NEGLIGIBLE`]/h_i) fall with i, with
     /// room to spare (as with centres spread evenly in time): the bases that can be active at
-    /// ζ are then a contiguous run, found by bisection ([`Basis::candidates`]).
+    /// ζ are then a contiguous run ([`Basis::candidates`]).
     sorted: bool,
     /// The phase rate α_ζ the centres were spread with ([`Basis::is_for`]).
     alpha_zeta: f64,
@@ -95,10 +95,13 @@ impl Basis {
 
     /// Indices of the bases that can be active at ζ, in order: with sorted windows, the run
     /// between the bases clearly above ζ (a prefix) and those clearly below it (a suffix),
-    /// each end found by bisection on the computed exponent; else all n. Every basis left out
-    /// has an exponent ≥ 36 (by sortedness, with a margin beyond rounding), so summing over
-    /// the run gives the same bits as summing over all n. Stores nothing per basis.
-    fn candidates(&self, zeta: f64) -> core::ops::Range<usize> {
+    /// each end found by walking from the run `near` (that of a nearby ζ: an RDMP step's
+    /// phase moves it by a basis at most; any guess gives the same run, since each end is
+    /// where a predicate holding on a prefix or a suffix changes); else all n. Every basis
+    /// left out has an exponent ≥ 36 (by sortedness, with a margin beyond rounding), so
+    /// summing over the run gives the same bits as summing over all n. Stores nothing per
+    /// basis.
+    fn candidates(&self, zeta: f64, near: &core::ops::Range<usize>) -> core::ops::Range<usize> {
         if !self.sorted {
             return 0..self.n;
         }
@@ -106,8 +109,20 @@ impl Basis {
             let (d, x) = self.exponent(i, zeta);
             d * side > 0.0 && x >= CLEARLY_NEGLIGIBLE
         };
-        let start = first_where(0, self.n, |i| !clear(i, -1.0));
-        let end = first_where(start, self.n, |i| clear(i, 1.0));
+        let mut start = near.start.min(self.n);
+        while start > 0 && !clear(start - 1, -1.0) {
+            start -= 1;
+        }
+        while start < self.n && clear(start, -1.0) {
+            start += 1;
+        }
+        let mut end = near.end.clamp(start, self.n);
+        while end > start && clear(end - 1, 1.0) {
+            end -= 1;
+        }
+        while end < self.n && !clear(end, 1.0) {
+            end += 1;
+        }
         start..end
     }
 
@@ -119,9 +134,10 @@ impl Basis {
     }
 
     /// [`Basis::features`] written over `out` in place (no features temporary to copy),
-    /// testing only the `Basis::candidates` at ζ.
+    /// testing only the `Basis::candidates` at ζ, found from the run `out` held before.
     pub fn features_into(&self, zeta: f64, out: &mut Features) {
-        self.features_among(self.candidates(zeta), zeta, out);
+        let near = out.first..out.last;
+        self.features_among(self.candidates(zeta, &near), zeta, out);
     }
 
     /// [`Basis::features_into`] testing every basis: the previous implementation, kept as the
@@ -140,7 +156,7 @@ impl Basis {
         for i in among {
             let (_, x) = self.exponent(i, zeta);
             if x < NEGLIGIBLE_EXPONENT {
-                let psi = libm::exp(-x);
+                let psi = crate::float::exp_neg(x);
                 values[i] = psi;
                 sum += psi;
                 first = first.min(i);
@@ -193,20 +209,6 @@ fn windows_fall(centres: &[f64]) -> bool {
         let (c0, c1) = (centres[i - 1], centres[i]);
         c1 - r1 < c0 - r0 - room && c1 + r1 < c0 + r0 - room
     })
-}
-
-/// The first index in `lo..hi` where `p` holds, for a `p` that holds on a suffix of it
-/// (bisection; `hi` if nowhere).
-fn first_where(mut lo: usize, mut hi: usize, p: impl Fn(usize) -> bool) -> usize {
-    while lo < hi {
-        let mid = lo + (hi - lo) / 2;
-        if p(mid) {
-            hi = mid;
-        } else {
-            lo = mid + 1;
-        }
-    }
-    lo
 }
 
 /// Share of τ over which the forcing term fades linearly to zero after τ. The demonstration
