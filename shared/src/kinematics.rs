@@ -100,11 +100,11 @@ impl Chain {
         self.walk(model, q, |_, _| {}).pose()
     }
 
-    /// The TCP pose and the Jacobian alone (what an RDMP step needs), with the bits of
-    /// [`Chain::kinematics`]' `tcp` and [`ArmKinematics::jacobian`]: the same frames,
-    /// computed alike, but only each joint's axis and origin kept.
+    /// The TCP frame and the Jacobian alone (what an RDMP step needs), with the bits of
+    /// [`Chain::kinematics`]' `tcp` (as [`Frame::pose`]) and [`ArmKinematics::jacobian`]:
+    /// the same frames, computed alike, but only each joint's axis and origin kept.
     #[inline(always)]
-    pub fn tcp_and_jacobian(&self, model: &RobotModel, q: &JointVector) -> (Pose, Jacobian) {
+    pub fn tcp_and_jacobian(&self, model: &RobotModel, q: &JointVector) -> (Frame, Jacobian) {
         let mut axes = [(Vector3::zeros(), Vector3::zeros()); NA];
         let tcp = self.walk(model, q, |k, f| {
             if let Some(a) = axes.get_mut(k.wrapping_sub(1)) {
@@ -116,7 +116,14 @@ impl Chain {
         for (i, (z, o)) in axes.iter().enumerate() {
             column_into(&mut jac, i, z, &pe, o);
         }
-        (tcp.pose(), jac)
+        (tcp, jac)
+    }
+
+    /// The TCP frame of `kin` (computed by this chain): its flange frame times the TCP's
+    /// transform, with the bits [`Chain::tcp_and_jacobian`] gives.
+    #[inline(always)]
+    pub fn tcp_frame_of(&self, model: &RobotModel, kin: &ArmKinematics) -> Frame {
+        self.tcp_frame(model, &kin.frames[LINK_TOOL])
     }
 
     /// Computes frames 1..=8 in order, showing each to `visit` with its index; returns the

@@ -20,10 +20,10 @@ use crate::dmp::{
     Ahead, Basis, DmpError, DmpParams, Forcing, MAX_BASES, MIN_SAMPLES, Phase, PositionDmp,
     PositionState, RotationDmp, RotationState,
 };
-use crate::kinematics::{ArmKinematics, Chain};
+use crate::kinematics::{ArmKinematics, Chain, Frame};
 use crate::nullspace::{JacobianQr, kernel};
 use crate::robot::RobotModel;
-use crate::se3::{Pose, Rot, pose_error};
+use crate::se3::{Pose, Rot};
 use crate::{Jacobian, JointVector, NA};
 use nalgebra::{Isometry3, Translation3, Vector1, Vector3, Vector6};
 
@@ -519,7 +519,8 @@ impl RdmpRun {
         let mut kin = ArmKinematics::identity();
         self.chain.kinematics_into(model, &self.q, &mut kin);
         observe(&kin);
-        let result = self.advance(model, cfg, &kin.tcp, &kin.jacobian(model), &dmp);
+        let tcp = self.chain.tcp_frame_of(model, &kin);
+        let result = self.advance(model, cfg, &tcp, &kin.jacobian(model), &dmp);
         if result.is_err() {
             moved.put_back(self);
         }
@@ -562,7 +563,7 @@ impl RdmpRun {
         &mut self,
         model: &RobotModel,
         cfg: &RdmpConfig,
-        tcp: &Pose,
+        tcp: &Frame,
         jac: &Jacobian,
         dmp: &DmpVelocities,
     ) -> Result<RdmpStep, RdmpError> {
@@ -576,7 +577,7 @@ impl RdmpRun {
                 manipulability,
             });
         }
-        let (e_p, e_r) = pose_error(&dmp.pose, tcp);
+        let (e_p, e_r) = tcp.error_from(&dmp.pose);
         let twist = join(&(dmp.v + e_p * cfg.gain), &(dmp.w + e_r * cfg.gain));
         let (ker, pinv) = qr.kernel_and_pinv(&twist);
         let mut gamma_measured = self.gamma_measured;
