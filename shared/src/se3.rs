@@ -205,6 +205,12 @@ mod tests {
         }
     }
 
+    /// A random unit axis (uniform in the cube, normalised).
+    fn random_axis(rng: &mut rand::rngs::StdRng) -> Vector3<f64> {
+        use rand::RngExt;
+        Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)).normalize()
+    }
+
     /// `exp` and `log` below their series thresholds (θ < 1/16 rad, θ < 1.8°) against the
     /// closed forms with libm's sine, cosine and atan2: within 2 ε per component (exp) and
     /// 4 ε of |v| (log); either side of the thresholds too.
@@ -213,12 +219,7 @@ mod tests {
         use rand::{RngExt, SeedableRng, rngs::StdRng};
         let mut rng = StdRng::seed_from_u64(3);
         for i in 0..100_000 {
-            let axis = Vector3::new(
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0f64),
-            )
-            .normalize();
+            let axis = random_axis(&mut rng);
             let theta = match i % 3 {
                 0 => rng.random_range(0.0..0.07),
                 1 => rng.random_range(0.0..1e-6),
@@ -270,12 +271,7 @@ mod tests {
         let mut rng = StdRng::seed_from_u64(7);
         let (mut shortcut, mut cases) = (0, 0);
         for i in 0..20_000 {
-            let axis = Vector3::new(
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0f64),
-            )
-            .normalize();
+            let axis = random_axis(&mut rng);
             let angle = match i % 4 {
                 0 => rng.random_range(0.0..1e-5),
                 1 => PI - rng.random_range(0.0..1e-6),

@@ -325,12 +325,7 @@ fn a_frames_pose_error_is_pose_error_of_its_pose() {
     let (mut series, mut worst) = (0, 0.0f64);
     for i in 0..20_000 {
         let (frame, _) = chain.tcp_and_jacobian(&model, &random_q(&mut rng, &model));
-        let axis = Vector3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0f64),
-        )
-        .normalize();
+        let axis = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)).normalize();
         let angle = match i % 4 {
             0 => rng.random_range(1e-9..1e-6),
             1 => rng.random_range(0.0..0.035),
