@@ -249,19 +249,12 @@ fn reflect_one<const K: usize>(qr: &JacobianQr, y: &mut [f64; 7]) {
     }
 }
 
-/// Reflection K of Q applied to two vectors at once (each as in [`reflect_one`]).
+/// Reflection K of Q applied to two vectors (each as [`reflect_one`]; inlined, the two
+/// independent chains interleave).
 #[inline(always)]
 fn reflect_pair<const K: usize>(qr: &JacobianQr, y: &mut [f64; 7], z: &mut [f64; 7]) {
-    let beta = qr.beta[K];
-    if beta != 0.0 {
-        let vk = &qr.v[K];
-        let sy = beta * dot_tree::<K>(vk, y);
-        let sz = beta * dot_tree::<K>(vk, z);
-        for i in K..7 {
-            y[i] -= sy * vk[i];
-            z[i] -= sz * vk[i];
-        }
-    }
+    reflect_one::<K>(qr, y);
+    reflect_one::<K>(qr, z);
 }
 
 impl JacobianQr {
