@@ -12,7 +12,7 @@ pub use frame::{Frame, quaternion_of};
 
 use crate::robot::{LINK_TOOL, N_FRAMES, RobotModel};
 use crate::se3::Pose;
-use crate::{Jacobian, JointVector, NA};
+use crate::{Jacobian, JacobianT, JointVector, NA};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 /// Everything one kinematics evaluation yields at a configuration q_a.
@@ -42,14 +42,19 @@ impl ArmKinematics {
     /// Geometric Jacobian of the TCP, 6×7, rows [v; ω] in the arm base frame:
     /// column i = [z_i × (p_e − p_i); z_i], z_i the axis of joint i (a column of frame i + 1).
     pub fn jacobian(&self, model: &RobotModel) -> Jacobian {
+        self.jacobian_t(model).transpose()
+    }
+
+    /// Jᵀ ([`ArmKinematics::jacobian`] transposed): row i = [z_i × (p_e − p_i); z_i]ᵀ.
+    pub fn jacobian_t(&self, model: &RobotModel) -> JacobianT {
         let pe = self.tcp.translation.vector;
-        let mut jac = Jacobian::zeros();
+        let mut jt = JacobianT::zeros();
         for (i, joint) in model.joints.iter().enumerate() {
             let f = &self.frames[i + 1];
             let z = joint_axis(f, &joint.axis, is_z(&joint.axis));
-            column_into(&mut jac, i, &z, &pe, &f.origin);
+            row_into(&mut jt, i, &z, &pe, &f.origin);
         }
-        jac
+        jt
     }
 
     /// Centres of the model's collision spheres in the arm base frame, written to `out`
@@ -100,11 +105,12 @@ impl Chain {
         self.walk(model, q, |_, _| {}).pose()
     }
 
-    /// The TCP frame and the Jacobian alone (what an RDMP step needs), with the bits of
-    /// [`Chain::kinematics`]' `tcp` (as [`Frame::pose`]) and [`ArmKinematics::jacobian`]:
-    /// the same frames, computed alike, but only each joint's axis and origin kept.
+    /// The TCP frame and the Jacobian's transpose alone (what an RDMP step needs), with the
+    /// bits of [`Chain::kinematics`]' `tcp` (as [`Frame::pose`]) and
+    /// [`ArmKinematics::jacobian_t`]: the same frames, computed alike, but only each joint's
+    /// axis and origin kept.
     #[inline(always)]
-    pub fn tcp_and_jacobian(&self, model: &RobotModel, q: &JointVector) -> (Frame, Jacobian) {
+    pub fn tcp_and_jacobian_t(&self, model: &RobotModel, q: &JointVector) -> (Frame, JacobianT) {
         let mut axes = [(Vector3::zeros(), Vector3::zeros()); NA];
         let tcp = self.walk(model, q, |k, f| {
             if let Some(a) = axes.get_mut(k.wrapping_sub(1)) {
@@ -112,15 +118,15 @@ impl Chain {
             }
         });
         let pe = tcp.origin;
-        let mut jac = Jacobian::zeros();
+        let mut jt = JacobianT::zeros();
         for (i, (z, o)) in axes.iter().enumerate() {
-            column_into(&mut jac, i, z, &pe, o);
+            row_into(&mut jt, i, z, &pe, o);
         }
-        (tcp, jac)
+        (tcp, jt)
     }
 
     /// The TCP frame of `kin` (computed by this chain): its flange frame times the TCP's
-    /// transform, with the bits [`Chain::tcp_and_jacobian`] gives.
+    /// transform, with the bits [`Chain::tcp_and_jacobian_t`] gives.
     #[inline(always)]
     pub fn tcp_frame_of(&self, model: &RobotModel, kin: &ArmKinematics) -> Frame {
         self.tcp_frame(model, &kin.frames[LINK_TOOL])
@@ -157,18 +163,14 @@ fn joint_axis(f: &Frame, axis: &Vector3<f64>, about_z: bool) -> Vector3<f64> {
     }
 }
 
-/// Column i of the geometric Jacobian: [z_i × (p_e − p_i); z_i].
+/// Column i of the geometric Jacobian, [z_i × (p_e − p_i); z_i], as row i of Jᵀ.
 #[inline(always)]
-fn column_into(
-    jac: &mut Jacobian,
-    i: usize,
-    z: &Vector3<f64>,
-    pe: &Vector3<f64>,
-    o: &Vector3<f64>,
-) {
+fn row_into(jt: &mut JacobianT, i: usize, z: &Vector3<f64>, pe: &Vector3<f64>, o: &Vector3<f64>) {
     let v = z.cross(&(pe - o));
-    jac.fixed_view_mut::<3, 1>(0, i).copy_from(&v);
-    jac.fixed_view_mut::<3, 1>(3, i).copy_from(z);
+    for c in 0..3 {
+        jt[(i, c)] = v[c];
+        jt[(i, 3 + c)] = z[c];
+    }
 }
 
 /// The frames of one [`ArmKinematics`] where the arm base is at `base`, each composed

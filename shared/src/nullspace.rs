@@ -16,7 +16,7 @@
 //! factorisation gives the minimum-norm solution J⁺V = Q [R⁻ᵀV; 0], so one QR per tick
 //! serves both M and J⁺ (Alg. 2, line 22).
 
-use crate::{Jacobian, JointVector};
+use crate::{Jacobian, JacobianT, JointVector};
 use nalgebra::Vector6;
 
 /// Relative size of R's smallest diagonal entry below which J counts as rank deficient.
@@ -52,13 +52,14 @@ impl JacobianQr {
     /// factorisation as [`JacobianQr::new_looped`] to rounding (test
     /// `the_step_qr_agrees_with_the_previous_one`).
     pub fn new(j: &Jacobian) -> Self {
-        // a = Jᵀ, column-major by construction: a[c][row] is Jᵀ(row, c) = J(c, row).
-        let mut a = [[0.0; 7]; 6];
-        for (c, col) in a.iter_mut().enumerate() {
-            for (row, v) in col.iter_mut().enumerate() {
-                *v = j[(c, row)];
-            }
-        }
+        Self::of_transpose(&j.transpose())
+    }
+
+    /// [`JacobianQr::new`] of J given as Jᵀ (what the RDMP step's kinematics give), the
+    /// same bits.
+    pub fn of_transpose(jt: &JacobianT) -> Self {
+        // a = Jᵀ's columns: a[c][row] is Jᵀ(row, c).
+        let mut a = jt.data.0;
         let mut qr = JacobianQr {
             v: [[0.0; 7]; 6],
             beta: [0.0; 6],

@@ -24,7 +24,7 @@ use crate::kinematics::{ArmKinematics, Chain, Frame};
 use crate::nullspace::{JacobianQr, kernel};
 use crate::robot::RobotModel;
 use crate::se3::{Pose, Rot};
-use crate::{Jacobian, JointVector, NA};
+use crate::{JacobianT, JointVector, NA};
 use nalgebra::{Isometry3, Translation3, Vector1, Vector3, Vector6};
 
 /// A trained RDMP, w_RDMP = (w_p, w_R, w_γ, γ_g) (Alg. 1).
@@ -478,7 +478,7 @@ impl RdmpRun {
     }
 
     /// Advances one step Δt (Alg. 2, lines 14–23, closed loop). FK computes the TCP and the
-    /// Jacobian alone ([`Chain::tcp_and_jacobian`]), with the bits of
+    /// Jacobian alone ([`Chain::tcp_and_jacobian_t`]), with the bits of
     /// [`RdmpRun::step_observed`]. (The two are written out: sharing their body through a
     /// closure cost 1 % of the step, 48 instructions.)
     pub fn step(
@@ -491,9 +491,8 @@ impl RdmpRun {
             return Err(RdmpError::Finished);
         }
         let moved = Moved::of(self);
-        let dmp = self.dmps(rdmp, cfg);
-        let (tcp, jac) = self.chain.tcp_and_jacobian(model, &self.q);
-        let result = self.advance(model, cfg, &tcp, &jac, &dmp);
+        let (tcp, jt) = self.chain.tcp_and_jacobian_t(model, &self.q);
+        let result = self.advance(model, rdmp, cfg, &tcp, &jt);
         if result.is_err() {
             moved.put_back(self);
         }
@@ -515,21 +514,21 @@ impl RdmpRun {
         // The DMPs step in place; a refused step puts back what they moved (`Moved`), so it
         // leaves the run unchanged without copying the states in and out on every step.
         let moved = Moved::of(self);
-        let dmp = self.dmps(rdmp, cfg);
         let mut kin = ArmKinematics::identity();
         self.chain.kinematics_into(model, &self.q, &mut kin);
         observe(&kin);
         let tcp = self.chain.tcp_frame_of(model, &kin);
-        let result = self.advance(model, cfg, &tcp, &kin.jacobian(model), &dmp);
+        let result = self.advance(model, rdmp, cfg, &tcp, &kin.jacobian_t(model));
         if result.is_err() {
             moved.put_back(self);
         }
         result
     }
 
-    /// The DMPs' Heun steps (Alg. 2, lines 14–21): they do not depend on q, so they come
-    /// before the kinematics and the processor overlaps their dependency chains with the
-    /// previous step's solve and this step's QR.
+    /// The DMPs' Heun steps (Alg. 2, lines 14–21). They do not depend on q: [`RdmpRun::advance`]
+    /// puts them between the kinematics and the QR, in whose long dependency chain (FK of q,
+    /// then six Householder steps, each a square root and a division) the processor runs
+    /// them.
     #[inline(always)]
     fn dmps(&mut self, rdmp: &Rdmp, cfg: &RdmpConfig) -> DmpVelocities {
         let pose = self.dmp_pose();
@@ -554,21 +553,23 @@ impl RdmpRun {
         }
     }
 
-    /// Step's work after the DMPs: the QR, the joint velocity (Alg. 2 line 7) and the checks;
-    /// commits q, γ's measurement and the phase only on success. The phase's next features,
-    /// φ(ζ_{k+2}), are computed right after the QR ([`Phase::prepare`]): independent of q, they
-    /// fill the time the QR's and the solve's dependency chains leave idle.
+    /// Step's work after the kinematics: the DMPs, the QR, the joint velocity (Alg. 2 line 7)
+    /// and the checks; commits q, γ's measurement and the phase only on success. The work
+    /// independent of q is placed where the chain from q to q̇ leaves the processor idle: the
+    /// DMPs ([`RdmpRun::dmps`]) before the QR, the phase's next features φ(ζ_{k+2}) right
+    /// after it ([`Phase::prepare`]).
     #[inline(always)]
     fn advance(
         &mut self,
         model: &RobotModel,
+        rdmp: &Rdmp,
         cfg: &RdmpConfig,
         tcp: &Frame,
-        jac: &Jacobian,
-        dmp: &DmpVelocities,
+        jt: &JacobianT,
     ) -> Result<RdmpStep, RdmpError> {
         let k = self.phase.step;
-        let qr = JacobianQr::new(jac);
+        let dmp = self.dmps(rdmp, cfg);
+        let qr = JacobianQr::of_transpose(jt);
         self.phase.prepare();
         let manipulability = qr.manipulability();
         if !(manipulability >= cfg.min_manipulability) {

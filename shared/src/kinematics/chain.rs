@@ -74,6 +74,41 @@ impl Turn {
     }
 }
 
+/// A fixed translation t as FK applies it, p ↦ p + R t.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Shift {
+    /// `Along(k)`: t_k is t's only non-zero component (every iiwa origin, flange and TCP),
+    /// applied as p + t_k · column k of R. The products left out are of zeros, so this is
+    /// R t + p to the sign of a zero.
+    Along(u8),
+    /// Any other t: R t + p.
+    General,
+}
+
+impl Shift {
+    /// The shift of `t`: [`Shift::Along`] its one non-zero axis (x for t = 0).
+    fn of(t: &Vector3<f64>) -> Shift {
+        let mut nonzero = (0..3).filter(|&k| t[k] != 0.0);
+        match (nonzero.next(), nonzero.next()) {
+            (Some(k), None) => Shift::Along(k as u8),
+            (None, _) => Shift::Along(0),
+            _ => Shift::General,
+        }
+    }
+
+    /// The origin of f · (t, ·): R t + p, f = (R, p).
+    #[inline(always)]
+    fn after(&self, f: &Frame, t: &Vector3<f64>) -> Vector3<f64> {
+        match *self {
+            Shift::Along(k) => {
+                let k = k as usize;
+                f.rotation.column(k) * t[k] + f.origin
+            }
+            Shift::General => f.transform_point(t),
+        }
+    }
+}
+
 /// How FK composes one model: how each joint origin's, the flange's and the TCP's rotation
 /// is applied (a signed permutation's columns, none, or a general rotation) and which joints
 /// turn about z. The translations, general rotations and other axes are read from the model
@@ -81,10 +116,12 @@ impl Turn {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Chain {
     origins: [Turn; NA],
+    /// How each joint origin's translation is applied.
+    shifts: [Shift; NA],
     /// Joint i turns about z (the two columns it mixes are turned in place).
     about_z: [bool; NA],
-    flange: Turn,
-    tcp: Turn,
+    flange: (Turn, Shift),
+    tcp: (Turn, Shift),
 }
 
 impl Chain {
@@ -92,9 +129,10 @@ impl Chain {
     pub fn new(model: &RobotModel) -> Chain {
         Chain {
             origins: core::array::from_fn(|i| Turn::of(&model.joints[i].origin.rotation)),
+            shifts: core::array::from_fn(|i| Shift::of(&model.joints[i].origin.translation.vector)),
             about_z: core::array::from_fn(|i| super::is_z(&model.joints[i].axis)),
-            flange: Turn::of(&model.flange.rotation),
-            tcp: Turn::of(&model.tcp.rotation),
+            flange: fixed_of(&model.flange),
+            tcp: fixed_of(&model.tcp),
         }
     }
 
@@ -103,7 +141,7 @@ impl Chain {
     #[inline(always)]
     pub(super) fn joint(&self, model: &RobotModel, i: usize, f: &Frame, q: f64) -> Frame {
         let joint = &model.joints[i];
-        let origin = f.transform_point(&joint.origin.translation.vector);
+        let origin = self.shifts[i].after(f, &joint.origin.translation.vector);
         let (s, c) = libm::sincos(q);
         let rotation = match (&self.origins[i], self.about_z[i]) {
             // [σ0 r_i0, σ1 r_i1, σ2 r_i2] · Rot(z, q), the signs σ moved onto c and s (exact,
@@ -149,10 +187,16 @@ impl Chain {
     }
 }
 
-/// f · p for a fixed transform p whose rotation reads as `turn`.
+/// How FK applies the fixed transform `p`.
+fn fixed_of(p: &Pose) -> (Turn, Shift) {
+    (Turn::of(&p.rotation), Shift::of(&p.translation.vector))
+}
+
+/// f · p for a fixed transform p applied as `how` ([`fixed_of`]).
 #[inline(always)]
-fn fixed(turn: &Turn, p: &Pose, f: &Frame) -> Frame {
-    let origin = f.transform_point(&p.translation.vector);
+fn fixed(how: &(Turn, Shift), p: &Pose, f: &Frame) -> Frame {
+    let (turn, shift) = how;
+    let origin = shift.after(f, &p.translation.vector);
     let rotation = match turn {
         Turn::Identity => f.rotation,
         turn => Matrix3::from_columns(&turn.after(&f.rotation, &p.rotation)),
@@ -194,7 +238,10 @@ mod tests {
                 .all(|t| matches!(t, Turn::Columns { .. }))
         );
         assert_eq!(chain.origins[0], Turn::Identity);
-        assert_eq!((chain.flange, chain.tcp), (Turn::Identity, Turn::Identity));
+        assert_eq!(
+            (chain.flange.0, chain.tcp.0),
+            (Turn::Identity, Turn::Identity)
+        );
         assert_eq!(chain.about_z, [true; NA]);
         let half = core::f64::consts::FRAC_PI_2;
         let quarter_about_x = UnitQuaternion::from_euler_angles(half, 0.0, 0.0);
@@ -211,5 +258,37 @@ mod tests {
             Turn::of(&UnitQuaternion::from_euler_angles(0.3, 0.0, 0.0)),
             Turn::General
         );
+    }
+
+    /// The iiwa's translations (origins, flange, TCP) lie on one axis each; a translation off
+    /// the axes is applied whole, and either way the origin is R t + p.
+    #[test]
+    fn translations_on_one_axis_are_read_as_such() {
+        let model = RobotModel::kmr_iiwa14();
+        let chain = Chain::new(&model);
+        let along = |s: &Shift| matches!(s, Shift::Along(_));
+        assert!(
+            chain
+                .shifts
+                .iter()
+                .chain([&chain.flange.1, &chain.tcp.1])
+                .all(along)
+        );
+        assert_eq!(Shift::of(&Vector3::new(0.0, 0.2045, 0.0)), Shift::Along(1));
+        assert_eq!(Shift::of(&Vector3::zeros()), Shift::Along(0));
+        assert_eq!(Shift::of(&Vector3::new(1e-9, 0.0, 0.3)), Shift::General);
+        let f = Frame {
+            rotation: *UnitQuaternion::from_euler_angles(0.3, -1.1, 2.0)
+                .to_rotation_matrix()
+                .matrix(),
+            origin: Vector3::new(0.1, -0.2, 0.7),
+        };
+        for t in [
+            Vector3::new(0.0, 0.0, 0.2155),
+            Vector3::new(0.3, -0.1, 0.02),
+        ] {
+            let shift = Shift::of(&t);
+            assert_eq!(shift.after(&f, &t), f.rotation * t + f.origin, "{shift:?}");
+        }
     }
 }
