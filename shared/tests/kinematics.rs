@@ -271,10 +271,10 @@ fn every_entry_point_gives_the_same_bits() {
         for _ in 0..500 {
             let q = random_q(&mut rng, m);
             let all = chain.kinematics(m, &q);
-            let (tcp, jac) = chain.tcp_and_jacobian_t(m, &q);
+            let (tcp, jt) = chain.tcp_and_jacobian_t(m, &q);
             assert_eq!(bits(&tcp.pose()), bits(&all.tcp), "q = {q:?}");
             assert_eq!(bits(&chain.tcp(m, &q)), bits(&all.tcp), "q = {q:?}");
-            let same = jac
+            let same = jt
                 .iter()
                 .zip(all.jacobian_t(m).iter())
                 .all(|(a, b)| a.to_bits() == b.to_bits());
