@@ -618,7 +618,7 @@ fn the_timing_probe_gives_the_ladders_verdict() {
                 usize::MAX,
                 probe,
                 || (),
-                |_, _| {},
+                Some(|_: &mut (), _: &_| {}),
             )
         };
         let (with, without) = (pace(true), pace(false));

@@ -320,13 +320,16 @@ pub fn evaluate_arm_motion_observed<S>(
         cap,
         true,
         || (RiskAccumulator::default(), true, Pose::identity(), fresh()),
-        |(acc, below, last, state), kin| {
-            *last = kin.tcp;
-            if *below && acc.add(model, field, arm_base, kin) >= bound {
-                *below = false;
-            }
-            observe(state, kin, acc.risk());
-        },
+        Some(
+            |(acc, below, last, state): &mut (RiskAccumulator, bool, Pose, S),
+             kin: &ArmKinematics| {
+                *last = kin.tcp;
+                if *below && acc.add(model, field, arm_base, kin) >= bound {
+                    *below = false;
+                }
+                observe(state, kin, acc.risk());
+            },
+        ),
     );
     let ((acc, below, last, state), steps) = (paced.observer, paced.steps);
     let (position, angle) = (

@@ -59,9 +59,11 @@ pub enum Run {
 }
 
 /// Integrates `rdmp` (already time-scaled by `scale`) from `q0` to `goal` (arm base frame),
-/// rating its stream, and shows `observe` the kinematics of every configuration it emits,
-/// q0 first and the final one last, as long as the stream stays within the limits (a run
-/// that leaves them ends [`Run::TooFast`], and what it observed is of no use).
+/// rating its stream, and shows `observe` (if any) the kinematics of every configuration it
+/// emits, q0 first and the final one last, as long as the stream stays within the limits (a
+/// run that leaves them ends [`Run::TooFast`], and what it observed is of no use). Without an
+/// observer each step computes the TCP and Jacobian alone ([`RdmpRun::step`]), not every
+/// frame: the same stream.
 #[allow(clippy::too_many_arguments)]
 pub fn run_at(
     model: &RobotModel,
@@ -72,7 +74,7 @@ pub fn run_at(
     goal: &Pose,
     scale: f64,
     cap: usize,
-    mut observe: impl FnMut(&ArmKinematics),
+    mut observe: Option<impl FnMut(&ArmKinematics)>,
 ) -> Run {
     let mut run = match RdmpRun::new(model, rdmp, q0, goal, cfg) {
         Ok(r) => r,
@@ -91,10 +93,9 @@ pub fn run_at(
         if steps >= cap {
             return Run::Capped;
         }
-        let step = if within {
-            run.step_observed(model, rdmp, cfg, &mut observe)
-        } else {
-            run.step(model, rdmp, cfg)
+        let step = match observe.as_mut() {
+            Some(observe) if within => run.step_observed(model, rdmp, cfg, observe),
+            _ => run.step(model, rdmp, cfg),
         };
         let q = match step {
             Ok(s) => s.q,
@@ -124,8 +125,10 @@ pub fn run_at(
             ratios: meter.ratios(),
         };
     }
-    let q: [f64; NA] = *meter.last();
-    observe(&ArmKinematics::new(model, &JointVector::from(q)));
+    if let Some(observe) = observe.as_mut() {
+        let q: [f64; NA] = *meter.last();
+        observe(&ArmKinematics::new(model, &JointVector::from(q)));
+    }
     Run::Within(ArmTiming {
         scale,
         steps: steps as u32,
@@ -204,8 +207,9 @@ pub const PROBE_STEPS: usize = 3;
 
 /// The smallest time scale on the ladder 1, [`next_scale`], … at which `rdmp` from `q0` to
 /// `goal` stays within `limits`, with its timing. Each run gets a `fresh()` observer that
-/// `observe` shows every configuration's kinematics. At most `cap` steps in all runs
-/// together ([`TimingError::Capped`] when they run out).
+/// `observe` (if any) shows every configuration's kinematics; without one the runs step by
+/// the TCP and Jacobian alone ([`run_at`]). At most `cap` steps in all runs together
+/// ([`TimingError::Capped`] when they run out).
 ///
 /// With `probe` (the planner's and the compiler's way), first the first [`PROBE_STEPS`] of
 /// the slowest run the ladder may try. The stream leaves rest there with the DMPs' initial
@@ -226,7 +230,7 @@ pub fn pace_observed<O>(
     cap: usize,
     probe: bool,
     mut fresh: impl FnMut() -> O,
-    mut observe: impl FnMut(&mut O, &ArmKinematics),
+    mut observe: Option<impl FnMut(&mut O, &ArmKinematics)>,
 ) -> Paced<O> {
     let mut steps = 0;
     if probe {
@@ -241,7 +245,7 @@ pub fn pace_observed<O>(
             goal,
             MAX_TIME_SCALE,
             probe_cap,
-            |_| {},
+            None::<fn(&ArmKinematics)>,
         ) {
             Run::TooFast { steps, ratios } => {
                 return Paced {
@@ -264,9 +268,10 @@ pub fn pace_observed<O>(
         let mut observer = fresh();
         let scaled = rdmp.time_scaled(scale);
         let left = cap.saturating_sub(steps);
-        let run = run_at(model, limits, cfg, &scaled, q0, goal, scale, left, |k| {
-            observe(&mut observer, k)
-        });
+        let shown = observe
+            .as_mut()
+            .map(|observe| |k: &ArmKinematics| observe(&mut observer, k));
+        let run = run_at(model, limits, cfg, &scaled, q0, goal, scale, left, shown);
         trials += 1;
         let timing = match run {
             Run::Within(t) => {
@@ -300,7 +305,7 @@ pub fn pace_observed<O>(
     }
 }
 
-/// [`pace_observed`] without an observer.
+/// [`pace_observed`] without an observer: its runs step by the TCP and Jacobian alone.
 pub fn pace(
     model: &RobotModel,
     limits: &MotionLimits,
@@ -319,7 +324,7 @@ pub fn pace(
         usize::MAX,
         true,
         || (),
-        |_, _| {},
+        None::<fn(&mut (), &ArmKinematics)>,
     )
     .timing
 }

@@ -131,3 +131,37 @@ fn a_fast_demonstration_is_slowed_down_not_clipped() {
             .any(|x| *x > 1.0)
     );
 }
+
+/// `pace` steps by the TCP and Jacobian alone, `pace_observed` computes every frame for its
+/// observer: the same streams, so the same timings, bit for bit, whichever rung they end on.
+#[test]
+fn pacing_without_an_observer_times_as_pacing_with_one() {
+    use prf_shared::timing::pace_observed;
+    let model = RobotModel::kmr_iiwa14();
+    let limits = MotionLimits::kmr_iiwa(&model);
+    let cfg = RdmpConfig::default();
+    for dt in [0.01, 0.005, 0.002] {
+        let (rdmp, demo) = trained(&model, dt);
+        let q0 = JointVector::from(demo[0]);
+        let end = JointVector::from(demo[demo.len() - 1]);
+        let goal = ArmKinematics::new(&model, &end).tcp;
+        let alone = pace(&model, &limits, &cfg, &rdmp, &q0, &goal);
+        let observed = pace_observed(
+            &model,
+            &limits,
+            &cfg,
+            &rdmp,
+            &q0,
+            &goal,
+            usize::MAX,
+            true,
+            || 0usize,
+            Some(|n: &mut usize, _: &ArmKinematics| *n += 1),
+        );
+        assert_eq!(alone, observed.timing, "samples every {dt} s");
+        if let Ok(t) = alone {
+            // The observer saw q0 … q_n of the last run.
+            assert_eq!(observed.observer, t.steps as usize + 1);
+        }
+    }
+}

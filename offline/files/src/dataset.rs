@@ -524,8 +524,36 @@ pub fn parse_trajectory(
 }
 
 /// The 12 numbers of one trajectory row, each finite; a row with another number of columns
-/// is refused first (nothing is allocated unless the row is refused).
+/// is refused first (nothing is allocated unless the row is refused). One pass over the row:
+/// its columns are counted again only when it is refused.
 fn parse_row(line: &str) -> Result<[f64; 12], ErrorKind> {
+    let mut v = [0.0; 12];
+    let mut fields = line.split(',');
+    let (mut parsed, mut first_error) = (0, None);
+    for ((x, column), f) in v.iter_mut().zip(CSV_HEADER).zip(fields.by_ref()) {
+        parsed += 1;
+        let f = f.trim();
+        match f.parse::<f64>() {
+            Ok(number) if number.is_finite() => *x = number,
+            Ok(_) => {
+                first_error = Some(ErrorKind::NonFinite {
+                    column: column.to_string(),
+                    value: f.to_string(),
+                });
+                break;
+            }
+            Err(_) => {
+                first_error = Some(ErrorKind::BadNumber {
+                    column: column.to_string(),
+                    value: f.to_string(),
+                });
+                break;
+            }
+        }
+    }
+    if first_error.is_none() && parsed == v.len() && fields.next().is_none() {
+        return Ok(v);
+    }
     let found = line.split(',').count();
     if found != CSV_HEADER.len() {
         return Err(ErrorKind::ColumnCount {
@@ -533,25 +561,7 @@ fn parse_row(line: &str) -> Result<[f64; 12], ErrorKind> {
             found,
         });
     }
-    let mut v = [0.0; 12];
-    for ((x, f), column) in v
-        .iter_mut()
-        .zip(line.split(',').map(str::trim))
-        .zip(CSV_HEADER)
-    {
-        let number: f64 = f.parse().map_err(|_| ErrorKind::BadNumber {
-            column: column.to_string(),
-            value: f.to_string(),
-        })?;
-        if !number.is_finite() {
-            return Err(ErrorKind::NonFinite {
-                column: column.to_string(),
-                value: f.to_string(),
-            });
-        }
-        *x = number;
-    }
-    Ok(v)
+    first_error.map_or(Ok(v), Err)
 }
 
 /// CSV text of a trajectory: time to 1 µs, positions to 1 nm and angles to 1 nrad (fine enough
@@ -572,4 +582,43 @@ pub fn trajectory_csv(samples: &[Sample]) -> String {
         let _ = writeln!(out, ",{}", s.gripper);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row's column count is judged before its numbers, in one pass or two.
+    #[test]
+    fn a_row_is_refused_for_its_columns_before_its_numbers() {
+        let good = "0.5,2.5,0,0,0,-1,0,-1.9,0,1.5,0,1";
+        let v = parse_row(good).expect("a good row");
+        assert_eq!((v[0], v[1], v[7], v[11]), (0.5, 2.5, -1.9, 1.0));
+        assert_eq!(parse_row(" 0.5 , 2.5,0,0,0,-1,0,-1.9,0,1.5,0, 1 "), Ok(v));
+        let columns = |found| {
+            Err(ErrorKind::ColumnCount {
+                expected: 12,
+                found,
+            })
+        };
+        assert_eq!(parse_row("0.5,2.5,0,0,0,-1,0,-1.9,0,1.5,0"), columns(11));
+        assert_eq!(parse_row(&format!("{good},7")), columns(13));
+        assert_eq!(parse_row(&format!("x,{good}")), columns(13));
+        assert_eq!(parse_row("x,2.5,0,0,0,-1,0,-1.9,0,1.5,0"), columns(11));
+        assert_eq!(parse_row(""), columns(1));
+        assert_eq!(
+            parse_row("0.5,2.5,0,0,0,-1,inf,-1.9,0,1.5,0,1"),
+            Err(ErrorKind::NonFinite {
+                column: "a3".into(),
+                value: "inf".into()
+            })
+        );
+        assert_eq!(
+            parse_row("0.5,2.5,0,0,0,-1,0,-1.9,0,1.5,0,one"),
+            Err(ErrorKind::BadNumber {
+                column: "gripper".into(),
+                value: "one".into()
+            })
+        );
+    }
 }

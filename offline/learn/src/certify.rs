@@ -10,7 +10,8 @@
 //! order. So the next build of a sweep ([`Certified`]) re-decides only the cells one of whose
 //! corners is encoded differently, and the spheres added since: the result is the same bytes
 //! a build from nothing gives. The cells are decided in parallel. A loaded knowledge base's
-//! sweep recovers these decisions from its field and spheres ([`Certified::recover`]).
+//! sweep recovers these decisions from its field ([`Certified::recover`]); which of its
+//! spheres touch a cell is found when the cell is decided anew.
 
 use crate::workspace::{LearnedField, SphereSample, WorkspaceConfig};
 use nalgebra::Vector3;
@@ -86,17 +87,20 @@ pub struct Certified {
     balls: Vec<Vec<(Vector3<f64>, f64)>>,
     /// Spheres decided (a prefix of the sweep's, which only grows).
     done: usize,
+    /// Spheres left out of the lists by a recovery, if any.
+    unlisted: Option<Box<Unlisted>>,
     /// Margin and ε the decisions were made with.
     settings: (f64, f64),
 }
 
 impl Certified {
     /// The decisions the build of `learned` from `spheres` (the sweep's spheres then) left,
-    /// recovered from what a knowledge base keeps, without deciding anything: every list from
-    /// the cells each sphere touches, every cell's balls from the field's certificate records
-    /// (whose mm steps are the balls' own), the node encodings from the field. None for a
-    /// field that is not valid, or with a ball at the end of a record's range (clamped there,
-    /// so not the ball decided).
+    /// recovered from what a knowledge base keeps, without deciding anything: every cell's
+    /// balls from the field's certificate records (whose mm steps are the balls' own), the
+    /// node encodings from the field. The cells' lists of these spheres are left to the build
+    /// that decides a cell anew ([`certificates`]); most builds decide none. None for a field
+    /// that is not valid, or with a ball at the end of a record's range (clamped there, so not
+    /// the ball decided).
     pub fn recover(
         learned: &LearnedField,
         spheres: &[SphereSample],
@@ -119,17 +123,57 @@ impl Certified {
                 radius as f64 * MM,
             ));
         }
-        let mut lists = vec![Vec::new(); n_cells];
-        Decide::new(field, cfg).list(&mut lists, spheres, 0);
         Some(Certified {
             grid: learned.grid(),
             tokens: learned.node_tokens(),
-            spheres: lists,
+            spheres: vec![Vec::new(); n_cells],
             balls,
             done: spheres.len(),
+            unlisted: Some(Box::new(Unlisted {
+                before: spheres.len(),
+                listed: vec![false; n_cells],
+            })),
             settings: (cfg.certify_margin, cfg.epsilon),
         })
     }
+
+    /// Completes the lists of the cells in `redo` that lack the spheres a recovery left out,
+    /// from one pass over those spheres (the lists stay ascending: they held only later ones).
+    fn list_before_unlisted(&mut self, decide: &Decide, redo: &[bool], spheres: &[SphereSample]) {
+        let Some(u) = self.unlisted.as_mut() else {
+            return;
+        };
+        let missing: Vec<bool> = (0..redo.len())
+            .map(|cell| redo[cell] && !u.listed[cell])
+            .collect();
+        if !missing.contains(&true) {
+            return;
+        }
+        let mut before: Vec<Vec<u32>> = vec![Vec::new(); redo.len()];
+        for (i, s) in spheres[..u.before].iter().enumerate() {
+            decide.cells_touched(s, |cell| {
+                if missing[cell] {
+                    before[cell].push(i as u32);
+                }
+            });
+        }
+        for (cell, mut list) in before.into_iter().enumerate() {
+            if missing[cell] {
+                list.append(&mut self.spheres[cell]);
+                self.spheres[cell] = list;
+                u.listed[cell] = true;
+            }
+        }
+    }
+}
+
+/// The spheres a recovery did not list ([`Certified::recover`]): those before `before` are in
+/// the lists of the `listed` cells only (a cell's list is needed only when the cell is decided
+/// anew).
+#[derive(Clone, Debug)]
+struct Unlisted {
+    before: usize,
+    listed: Vec<bool>,
 }
 
 /// The certificate records (cell, centre and radius in mm) of `learned`, whose certificates
@@ -160,6 +204,7 @@ pub fn certificates(
             spheres: vec![Vec::new(); n_cells],
             balls: vec![Vec::new(); n_cells],
             done: 0,
+            unlisted: None,
             settings,
         },
     };
@@ -172,6 +217,7 @@ pub fn certificates(
         vec![false; n_cells]
     };
     let decide = Decide::new(field, cfg);
+    c.list_before_unlisted(&decide, &redo, spheres);
     let old: Vec<usize> = c.spheres.iter().map(Vec::len).collect();
     decide.list(&mut c.spheres, spheres, c.done);
     c.spheres
