@@ -283,7 +283,7 @@ fn the_field_is_conservative_and_at_most_one_voxel_diagonal_shallow() {
     // Half the points near demonstrated spheres (where it matters), half anywhere in the box.
     for k in 0..1500 {
         let x = if k % 2 == 0 {
-            let s = &sweep.spheres[rng.random_range(0..sweep.spheres.len())];
+            let s = &sweep.spheres.get(rng.random_range(0..sweep.spheres.len()));
             s.centre + Vector3::from_fn(|_, _| rng.random_range(-0.15..0.15))
         } else {
             Vector3::from_fn(|i, _| rng.random_range(lo[i]..hi[i]))
@@ -463,7 +463,7 @@ fn learning_takes_r_d_from_the_dataset_and_refuses_to_guess() {
     let mut rng = StdRng::seed_from_u64(23);
     let mut deeper = 0.0f64;
     for _ in 0..1000 {
-        let s = &sweep.spheres[rng.random_range(0..sweep.spheres.len())];
+        let s = &sweep.spheres.get(rng.random_range(0..sweep.spheres.len()));
         let x = s.centre + Vector3::from_fn(|_, _| rng.random_range(-0.15..0.15));
         let reference = brute(&sweep, 0.010, &x);
         assert!(

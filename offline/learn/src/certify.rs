@@ -13,6 +13,7 @@
 //! sweep recovers these decisions from its field ([`Certified::recover`]); which of its
 //! spheres touch a cell is found when the cell is decided anew.
 
+use crate::in_file::Spheres;
 use crate::workspace::{LearnedField, SphereSample, WorkspaceConfig};
 use nalgebra::Vector3;
 use prf_shared::field::{BRICK, BRICK_NODES, CERT_BYTES, Field, Hint, MM, NODE_BYTES, UNIFORM};
@@ -94,7 +95,7 @@ pub struct Certified {
 }
 
 impl Certified {
-    /// The decisions the build of `learned` from `spheres` (the sweep's spheres then) left,
+    /// The decisions the build of `learned` from the sweep's first `spheres` spheres left,
     /// recovered from what a knowledge base keeps, without deciding anything: every cell's
     /// balls from the field's certificate records (whose mm steps are the balls' own), the
     /// node encodings from the field. The cells' lists of these spheres are left to the build
@@ -103,7 +104,7 @@ impl Certified {
     /// the ball decided).
     pub fn recover(
         learned: &LearnedField,
-        spheres: &[SphereSample],
+        spheres: usize,
         cfg: &WorkspaceConfig,
     ) -> Option<Certified> {
         let field = Field::new(&learned.data()).ok()?;
@@ -128,9 +129,9 @@ impl Certified {
             tokens: learned.node_tokens(),
             spheres: vec![Vec::new(); n_cells],
             balls,
-            done: spheres.len(),
+            done: spheres,
             unlisted: Some(Box::new(Unlisted {
-                before: spheres.len(),
+                before: spheres,
                 listed: vec![false; n_cells],
             })),
             settings: (cfg.certify_margin, cfg.epsilon),
@@ -139,7 +140,7 @@ impl Certified {
 
     /// Completes the lists of the cells in `redo` that lack the spheres a recovery left out,
     /// from one pass over those spheres (the lists stay ascending: they held only later ones).
-    fn list_before_unlisted(&mut self, decide: &Decide, redo: &[bool], spheres: &[SphereSample]) {
+    fn list_before_unlisted(&mut self, decide: &Decide, redo: &[bool], spheres: &Spheres) {
         let Some(u) = self.unlisted.as_mut() else {
             return;
         };
@@ -150,8 +151,8 @@ impl Certified {
             return;
         }
         let mut before: Vec<Vec<u32>> = vec![Vec::new(); redo.len()];
-        for (i, s) in spheres[..u.before].iter().enumerate() {
-            decide.cells_touched(s, |cell| {
+        for (i, s) in spheres.iter().take(u.before).enumerate() {
+            decide.cells_touched(&s, |cell| {
                 if missing[cell] {
                     before[cell].push(i as u32);
                 }
@@ -182,7 +183,7 @@ struct Unlisted {
 /// what this build decided, for the next.
 pub fn certificates(
     learned: &LearnedField,
-    spheres: &[SphereSample],
+    spheres: &Spheres,
     last: Option<Certified>,
     cfg: &WorkspaceConfig,
 ) -> (Vec<u8>, Certified) {
@@ -234,7 +235,7 @@ pub fn certificates(
                     old[cell]
                 };
                 for &i in &list[from..] {
-                    decide.sphere_in_cell(&spheres[i as usize], cell, balls);
+                    decide.sphere_in_cell(&spheres.get(i as usize), cell, balls);
                 }
             },
         );
@@ -273,9 +274,9 @@ impl<'a> Decide<'a> {
     }
 
     /// Appends to each cell's list the spheres from index `from` on that touch it, in order.
-    fn list(&self, lists: &mut [Vec<u32>], spheres: &[SphereSample], from: usize) {
-        for (i, s) in spheres.iter().enumerate().skip(from) {
-            self.cells_touched(s, |cell| lists[cell].push(i as u32));
+    fn list(&self, lists: &mut [Vec<u32>], spheres: &Spheres, from: usize) {
+        for (i, s) in (from..).zip(spheres.iter_from(from)) {
+            self.cells_touched(&s, |cell| lists[cell].push(i as u32));
         }
     }
 

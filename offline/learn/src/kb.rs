@@ -18,6 +18,7 @@
 //! postcard: the file grows by appending instead of being rewritten whole, and loading replays
 //! the additions.
 
+use crate::workspace::{SeenKey, SphereSample};
 use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
 use prf_shared::NA;
 use prf_shared::dmp::{DmpParams, MAX_BASES};
@@ -25,6 +26,7 @@ use prf_shared::rdmp::Rdmp;
 use prf_shared::robot::{Joint, PlatformBox, RobotModel, Sphere};
 use prf_shared::se3::Pose;
 use serde::{Deserialize, Serialize};
+use std::marker::PhantomData;
 use std::ops::Range;
 
 /// The file's first bytes.
@@ -327,16 +329,73 @@ pub(crate) struct AffordanceState {
     pub counts: Vec<usize>,
 }
 
-/// A [`crate::workspace::Sweep`], in a section of its own ([`section`]).
+/// A [`crate::workspace::Sweep`], in a section of its own ([`section`]). Read, its spheres
+/// and keys stay in the bytes read ([`RecordBytes`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct SweepState {
-    #[serde(with = "records")]
-    pub spheres: Vec<crate::workspace::SphereSample>,
-    #[serde(with = "records")]
-    pub seen: Vec<crate::workspace::SeenKey>,
+pub(crate) struct SweepState<'a> {
+    #[serde(borrow)]
+    pub spheres: RecordBytes<'a, SphereSample>,
+    #[serde(borrow)]
+    pub seen: RecordBytes<'a, SeenKey>,
     pub feature_spacing: f64,
     pub features: Vec<([f64; 3], f64)>,
     pub splat: Option<SplatState>,
+}
+
+/// An array of [`Record`]s as the file holds it, one byte string: borrowed from the bytes
+/// read (a sweep's spheres and keys stay there, [`crate::in_file`]), or made to be written.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct RecordBytes<'a, T>(pub std::borrow::Cow<'a, [u8]>, PhantomData<T>);
+
+impl<'a, T: Record> RecordBytes<'a, T> {
+    pub fn new(bytes: std::borrow::Cow<'a, [u8]>) -> Self {
+        RecordBytes(bytes, PhantomData)
+    }
+
+    /// Number of records.
+    pub fn len(&self) -> usize {
+        self.0.len() / T::SIZE
+    }
+
+    /// Record `i` (< [`RecordBytes::len`]).
+    pub fn get(&self, i: usize) -> T {
+        T::get(&self.0[i * T::SIZE..(i + 1) * T::SIZE])
+    }
+}
+
+impl<T: Record + Sync> RecordBytes<'_, T> {
+    /// Whether every record passes `test` (decoded on every core: the example cell's Table
+    /// holds 338 k spheres).
+    pub fn all(&self, test: impl Fn(&T) -> bool + Sync) -> bool {
+        use rayon::prelude::*;
+        let records = self.0.par_chunks_exact(T::SIZE);
+        records.all(|b| test(&T::get(b)))
+    }
+
+    /// Whether the records ascend strictly (on every core).
+    pub fn ascending(&self) -> bool
+    where
+        T: PartialOrd,
+    {
+        use rayon::prelude::*;
+        (1..self.len())
+            .into_par_iter()
+            .all(|i| self.get(i - 1) < self.get(i))
+    }
+}
+
+impl<T> Serialize for RecordBytes<'_, T> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_bytes(&self.0)
+    }
+}
+
+impl<'de: 'a, 'a, T: Record> Deserialize<'de> for RecordBytes<'a, T> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let b = <&'de [u8]>::deserialize(d)?;
+        records::whole::<D::Error>(b.len(), T::SIZE)?;
+        Ok(RecordBytes::new(std::borrow::Cow::Borrowed(b)))
+    }
 }
 
 /// The last field build's splat of a sweep.
@@ -471,14 +530,14 @@ fn put_f64s<'a>(out: &mut [u8], values: impl IntoIterator<Item = &'a f64>) {
 
 /// Centre x, y, z and radius: decoded straight into the sweep's own type (no second copy of
 /// the example cell's 38 MB of swept spheres).
-impl Record for crate::workspace::SphereSample {
+impl Record for SphereSample {
     const SIZE: usize = 32;
     fn put(&self, out: &mut [u8]) {
         put_f64s(out, self.centre.iter().chain([&self.radius]));
     }
     fn get(b: &[u8]) -> Self {
         let [x, y, z, radius] = words(b, f64::from_le_bytes);
-        crate::workspace::SphereSample {
+        SphereSample {
             centre: Vector3::new(x, y, z),
             radius,
         }
@@ -558,16 +617,20 @@ mod records {
         d: D,
     ) -> Result<Vec<T>, D::Error> {
         let b = <&[u8]>::deserialize(d)?;
-        if b.len() % T::SIZE != 0 {
-            return Err(D::Error::custom(format!(
-                "an array of {} bytes is not made of {}-byte records",
-                b.len(),
-                T::SIZE
-            )));
-        }
+        whole::<D::Error>(b.len(), T::SIZE)?;
         // In parallel, in place: the example cell's 1.2 M swept spheres and keys are most of
         // what reading a knowledge base costs.
         Ok(b.par_chunks_exact(T::SIZE).map(T::get).collect())
+    }
+
+    /// Refuses an array of `len` bytes that is not whole `size`-byte records.
+    pub fn whole<E: Error>(len: usize, size: usize) -> Result<(), E> {
+        if !len.is_multiple_of(size) {
+            return Err(E::custom(format!(
+                "an array of {len} bytes is not made of {size}-byte records"
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -595,7 +658,7 @@ pub(crate) fn encode(state: &LearnerState, sections: &[&[u8]]) -> Vec<u8> {
 }
 
 /// A location type's sweep section: its length, CRC-32 and `sweep` in postcard.
-pub(crate) fn section(sweep: &SweepState) -> Vec<u8> {
+pub(crate) fn section(sweep: &SweepState<'_>) -> Vec<u8> {
     framed(sweep)
 }
 
@@ -827,7 +890,7 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Decoded, KbError> {
 /// checked; the error says what is wrong with it. The CRC is computed beside the decoding
 /// (on another core; 1.9 ms for the example cell's 15 MB Table), whose result is dropped
 /// unless the CRC matches; decoding any bytes is safe (the fuzzer decodes sealed ones).
-pub(crate) fn read_section(framed: &[u8]) -> Result<SweepState, String> {
+pub(crate) fn read_section(framed: &[u8]) -> Result<SweepState<'_>, String> {
     if framed.len() < FRAME {
         return Err("is cut short".into());
     }

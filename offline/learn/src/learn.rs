@@ -104,8 +104,11 @@ pub struct Lesson {
     affordance: Option<(Frame, Pose)>,
     /// The instance's robot spheres in the location frame, in sweep order.
     sweep: Option<Arc<SweptPath>>,
-    arm: Option<(Vec<[f64; 7]>, f64, prf_shared::rdmp::Rdmp)>,
+    arm: Option<ArmLesson>,
 }
+
+/// A learnable arm motion's lesson: its uniform joint path, time step and trained RDMP.
+type ArmLesson = (Vec<[f64; 7]>, f64, prf_shared::rdmp::Rdmp);
 
 /// The lessons of one demonstration.
 #[derive(Clone, Debug)]
@@ -246,19 +249,44 @@ fn lessons(
             demonstration: d.id.clone(),
             kind: d.task.part.kind.clone(),
         })?;
-    let mut instances = Vec::new();
-    for m in CLASSES.iter() {
-        m.segment(&d.samples, &mut |i| instances.push((*m, i)));
-    }
-    let per_instance: Vec<Result<Lesson, LearnError>> = instances
+    let per_instance: Vec<Result<Lesson, LearnError>> = instances(d)
         .into_par_iter()
         .map(|(m, inst)| lesson(model, kinds, d, cfg, m, inst, part_type))
         .collect();
     per_instance.into_iter().collect()
 }
 
+/// Alg. 3 line 5 for demonstration `d`: every instance of every class, class by class.
+fn instances(d: &Demonstration) -> Vec<(&'static dyn MotionClass, Instance)> {
+    let mut instances = Vec::new();
+    for m in CLASSES.iter() {
+        m.segment(&d.samples, &mut |i| instances.push((*m, i)));
+    }
+    instances
+}
+
+/// The location whose workspace instance `inst` of class `m` sweeps (line 11), if any.
+fn swept_location(m: &dyn MotionClass, inst: &Instance) -> Option<TaskLocation> {
+    let in_location = m.frames().workspace == Frame::Location;
+    inst.location
+        .filter(|_| m.learns_workspace() && in_location)
+}
+
+/// The location types whose workspaces the lessons of `d` grow, ascending, from its
+/// segmentation alone: [`Lessons::swept_types`] before the lessons are learned.
+fn swept_types_of(kinds: &[String], d: &Demonstration) -> Vec<usize> {
+    let mut types: Vec<usize> = instances(d)
+        .iter()
+        .filter_map(|(m, inst)| swept_location(*m, inst))
+        .filter_map(|l| kinds.iter().position(|k| *k == location_of(d, l).kind))
+        .collect();
+    types.sort_unstable();
+    types.dedup();
+    types
+}
+
 /// The lesson of instance `inst` of class `m` in demonstration `d`: its affordance, the
-/// spheres it sweeps, its trained RDMP.
+/// spheres it sweeps and its trained RDMP (these two at once, on whichever core is free).
 fn lesson(
     model: &RobotModel,
     kinds: &[String],
@@ -279,56 +307,64 @@ fn lesson(
         (Some(r), Some(a)) => Some((fr.affordance, a.inverse() * r)),
         _ => None,
     };
-    let sweep = if m.learns_workspace() {
-        match (inst.location, fr.workspace) {
-            (Some(l), Frame::Location) => {
-                let loc =
-                    pose_from_array(location_of(d, l).pose).ok_or_else(|| LearnError::BadPose {
-                        demonstration: d.id.clone(),
-                        what: "location",
-                    })?;
-                let s = &d.samples[inst.at];
-                let path: Vec<[f64; 7]> = d.samples[inst.range.clone()]
-                    .iter()
-                    .map(|s| s.arm)
-                    .collect();
-                let base = loc.inverse() * arm_base_pose(model, s.base);
-                Some(Arc::new(SweptPath::new(Sweep::path_spheres(
-                    model,
-                    &base,
-                    &path,
-                    cfg.workspace.resample,
-                ))))
-            }
-            _ => None,
-        }
-    } else {
-        None
+    let sweep = || -> Result<_, LearnError> {
+        let Some(l) = swept_location(m, &inst) else {
+            return Ok(None);
+        };
+        let loc = pose_from_array(location_of(d, l).pose).ok_or_else(|| LearnError::BadPose {
+            demonstration: d.id.clone(),
+            what: "location",
+        })?;
+        let s = &d.samples[inst.at];
+        let path: Vec<[f64; 7]> = d.samples[inst.range.clone()]
+            .iter()
+            .map(|s| s.arm)
+            .collect();
+        let base = loc.inverse() * arm_base_pose(model, s.base);
+        Ok(Some(Arc::new(SweptPath::new(Sweep::path_spheres(
+            model,
+            &base,
+            &path,
+            cfg.workspace.resample,
+        )))))
     };
-    let arm = match (&inst.arm, m.generators().iter().any(|g| g.learnable())) {
-        (Some(a), true) => {
-            let (path, dt) = skills::uniform_path(&d.samples[a.forward.clone()]);
-            let rdmp = skills::train(model, &path, dt, &cfg.dmp, cfg.min_manipulability).map_err(
-                |error| LearnError::Skill {
-                    demonstration: d.id.clone(),
-                    first: line(a.forward.start),
-                    last: line(a.forward.end - 1),
-                    class: m.name(),
-                    error,
-                },
-            )?;
-            Some((path, dt, rdmp))
-        }
-        _ => None,
-    };
+    let (sweep, arm) = rayon::join(sweep, || arm_lesson(model, d, cfg, m, &inst));
     Ok(Lesson {
         class: m.name(),
         location_type,
         part_type,
         affordance,
-        sweep,
-        arm,
+        sweep: sweep?,
+        arm: arm?,
     })
+}
+
+/// The RDMP instance `inst` of class `m` in demonstration `d` teaches (TrainRDMP, Alg. 1),
+/// with its uniform path and time step; None for a class without a learnable arm motion.
+fn arm_lesson(
+    model: &RobotModel,
+    d: &Demonstration,
+    cfg: &LearnConfig,
+    m: &'static dyn MotionClass,
+    inst: &Instance,
+) -> Result<Option<ArmLesson>, LearnError> {
+    Ok(
+        match (&inst.arm, m.generators().iter().any(|g| g.learnable())) {
+            (Some(a), true) => {
+                let (path, dt) = skills::uniform_path(&d.samples[a.forward.clone()]);
+                let rdmp = skills::train(model, &path, dt, &cfg.dmp, cfg.min_manipulability)
+                    .map_err(|error| LearnError::Skill {
+                        demonstration: d.id.clone(),
+                        first: line(a.forward.start),
+                        last: line(a.forward.end - 1),
+                        class: m.name(),
+                        error,
+                    })?;
+                Some((path, dt, rdmp))
+            }
+            _ => None,
+        },
+    )
 }
 
 /// Location types in first-appearance order of the manifest.
@@ -414,16 +450,34 @@ pub fn learn_lessons_into_with<R: Send>(
     ));
     let t0 = Instant::now();
     // Lines 4–16, in parallel over demonstrations; merged in dataset order (deterministic).
-    let per_demo: Vec<Lessons> = demos
-        .par_iter()
-        .map(|d| {
-            let l = learner.lessons(d);
-            progress(Progress::Done(1));
-            l
-        })
-        .collect::<Result<_, LearnError>>()?;
+    // Beside them, the sweeps they will grow are read from the file.
+    let (per_demo, read) = rayon::join(
+        || {
+            demos
+                .par_iter()
+                .map(|d| {
+                    let l = learner.lessons(d);
+                    progress(Progress::Done(1));
+                    l
+                })
+                .collect::<Result<Vec<Lessons>, LearnError>>()
+        },
+        || learner.read_ahead(demos),
+    );
+    let per_demo = per_demo?;
     for l in &per_demo {
         learner.add(l);
+    }
+    let lessons_timed = if read.is_empty() {
+        "segment + train skills"
+    } else {
+        "segment + train skills + sweeps read"
+    };
+    // Installed as the field builds would read them: in type order, those with new spheres.
+    for (t, sweep) in read {
+        if !learner.pending[t].is_empty() {
+            learner.install(t, sweep?)?;
+        }
     }
     let t_segment = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
@@ -439,7 +493,7 @@ pub fn learn_lessons_into_with<R: Send>(
     );
     let mut knowledge = knowledge?;
     knowledge.timings = vec![
-        ("segment + train skills", t_segment),
+        (lessons_timed, t_segment),
         ("workspaces", t1.elapsed().as_secs_f64()),
     ];
     Ok((knowledge, per_demo, r))
@@ -509,7 +563,7 @@ impl Learner {
                 })
                 .collect(),
             sweeps: vec![
-                Slot::Ready(Sweep::new(config.workspace.feature_spacing));
+                Slot::Ready(Box::new(Sweep::new(config.workspace.feature_spacing)));
                 location_kinds.len()
             ],
             pending: vec![Vec::new(); location_kinds.len()],
@@ -537,6 +591,25 @@ impl Learner {
                 &self.config,
             )?,
         })
+    }
+
+    /// The sweeps still in the file of the location types the lessons of `demos` will grow
+    /// ([`swept_types_of`]), decoded in type order ([`Learner::decode_stored`]): read while
+    /// the lessons are learned, not after them.
+    fn read_ahead(
+        &self,
+        demos: &[Demonstration],
+    ) -> Vec<(usize, Result<Sweep, crate::kb::KbError>)> {
+        let mut types: Vec<usize> = demos
+            .iter()
+            .flat_map(|d| swept_types_of(&self.location_kinds, d))
+            .collect();
+        types.sort_unstable();
+        types.dedup();
+        types
+            .into_iter()
+            .filter_map(|t| Some((t, self.decode_stored(t)?)))
+            .collect()
     }
 
     /// Merges a demonstration's lessons (Alg. 3 lines 9, 13–16) and queues its swept spheres
@@ -756,7 +829,10 @@ impl Learner {
         for (t, range) in decoded.sweeps.into_iter().enumerate() {
             learner.sweeps[t] = match file {
                 Some(f) => Slot::stored(f.clone(), range),
-                None => Slot::Ready(learner.sweep_of(t, &bytes[range.clone()], range.start)?),
+                None => {
+                    let section = &bytes[range.clone()];
+                    Slot::Ready(Box::new(learner.sweep_of(t, section, range.start, None)?))
+                }
             };
         }
         for a in decoded.additions {
@@ -860,7 +936,8 @@ impl Learner {
         let v = |c: [f64; 3]| nalgebra::Vector3::new(c[0], c[1], c[2]);
 
         let robot = st.robot.model()?;
-        let sweeps = vec![Slot::Ready(Sweep::new(st.config.workspace.feature_spacing)); types];
+        let empty = Sweep::new(st.config.workspace.feature_spacing);
+        let sweeps = vec![Slot::Ready(Box::new(empty)); types];
         Ok(Learner {
             robot,
             description: st.description,
@@ -1008,11 +1085,11 @@ fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
 /// Why a location type's sweep in a knowledge base is refused, if it is: a swept sphere or
 /// feature ball not finite within 100 m or with a radius outside (0, 1] m, or a feature
 /// spacing other than the settings'.
-fn check_sweep(s: &crate::kb::SweepState, w: &WorkspaceConfig) -> Result<(), String> {
+fn check_sweep(s: &crate::kb::SweepState<'_>, w: &WorkspaceConfig) -> Result<(), String> {
     let ball = |(c, r): &([f64; 3], f64)| within_100_m(c) && *r > 0.0 && *r <= 1.0;
     let sample = |x: &workspace::SphereSample| ball(&(x.centre.into(), x.radius));
     // The example cell's Table holds 338 k spheres: checked on every core.
-    if !s.spheres.par_iter().all(sample) || !s.features.iter().all(ball) {
+    if !s.spheres.all(sample) || !s.features.iter().all(ball) {
         return Err("holds a swept sphere out of range".into());
     }
     if s.feature_spacing != w.feature_spacing {

@@ -4,7 +4,7 @@
 //!   [`prf_shared::motion::CLASSES`];
 //! - [`kb`]: the knowledge base, a learner's whole state on disk, for `prf learn --add`;
 //! - [`affordance`]: stances and grasps with tolerance;
-//! - [`workspace`] (+ [`edt`], [`certify`]): Ω+ per location type as a conservative distance field;
+//! - [`workspace`] (+ [`edt`], [`certify`], [`in_file`]): Ω+ per location type as a conservative distance field;
 //! - [`skills`]: TrainRDMP on arm motions, the skill sets and share();
 //! - [`compile`](mod@compile): Learn's output → the blob ([`prf_shared::blob`]);
 //! - [`report`](mod@report): a blob's contents and sizes, as `prf learn` and `prf inspect` print them.
@@ -16,6 +16,7 @@ pub mod affordance;
 pub mod certify;
 pub mod compile;
 pub mod edt;
+pub mod in_file;
 pub mod kb;
 pub mod learn;
 pub mod report;

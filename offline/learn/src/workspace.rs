@@ -19,6 +19,9 @@
 
 use crate::certify::{self, Certified};
 use crate::edt;
+use crate::in_file::{Seen, Spheres};
+use crate::learn::KbFile;
+use itertools::Itertools;
 use nalgebra::Vector3;
 use prf_shared::JointVector;
 use prf_shared::field::{
@@ -27,7 +30,6 @@ use prf_shared::field::{
 use prf_shared::kinematics::ArmKinematics;
 use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
-use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 use std::collections::HashSet;
 
@@ -85,9 +87,9 @@ pub struct PathSphere {
 /// gives what adding them at once gives).
 #[derive(Clone, Debug)]
 pub struct Sweep {
-    pub spheres: Vec<SphereSample>,
-    /// The [`SeenKey`]s of `spheres`, sorted.
-    seen: Vec<SeenKey>,
+    pub spheres: Spheres,
+    /// The [`SeenKey`]s of `spheres`.
+    seen: Seen,
     /// Feature-ball spacing, m ([`WorkspaceConfig::feature_spacing`]).
     feature_spacing: f64,
     /// The thinned spheres (centre, r_j): every sphere whose centre is not within the
@@ -111,8 +113,8 @@ impl Sweep {
     /// An empty sweep thinning its feature balls to `feature_spacing` (m).
     pub fn new(feature_spacing: f64) -> Self {
         Sweep {
-            spheres: Vec::new(),
-            seen: Vec::new(),
+            spheres: Spheres::default(),
+            seen: Seen::default(),
             feature_spacing,
             features: Vec::new(),
             kept: FxHashSet::default(),
@@ -177,11 +179,11 @@ impl Sweep {
     }
 
     /// The sweep as plain data, for the knowledge-base file ([`crate::kb`]).
-    pub(crate) fn to_state(&self) -> crate::kb::SweepState {
+    pub(crate) fn to_state(&self) -> crate::kb::SweepState<'static> {
         let v = |p: &Vector3<f64>| [p.x, p.y, p.z];
         crate::kb::SweepState {
-            spheres: self.spheres.clone(),
-            seen: self.seen.clone(),
+            spheres: self.spheres.to_records(),
+            seen: self.seen.to_records(),
             feature_spacing: self.feature_spacing,
             features: self.features.iter().map(|(c, r)| (v(c), *r)).collect(),
             splat: self.splat_state(),
@@ -202,7 +204,7 @@ impl Sweep {
     ) {
         let recover = field.filter(|_| self.certified.is_none());
         let (certified, fresh) = rayon::join(
-            || recover.and_then(|f| Certified::recover(f, &self.spheres, cfg)),
+            || recover.and_then(|f| Certified::recover(f, self.spheres.len(), cfg)),
             || self.fresh(model, paths),
         );
         if recover.is_some() {
@@ -263,20 +265,13 @@ impl Sweep {
         dims.iter().fold(1usize, |n, d| n.saturating_mul(*d))
     }
 
-    /// The sweep [`Sweep::to_state`] gave ([`Sweep::set_splat`] for its splat).
-    pub(crate) fn from_state(s: crate::kb::SweepState) -> Self {
+    /// The sweep [`Sweep::to_state`] gave ([`Sweep::set_splat`] for its splat), its spheres
+    /// and keys left in `file` when `s` was read from it ([`crate::in_file`]).
+    pub(crate) fn from_state(s: crate::kb::SweepState<'_>, file: Option<&KbFile>) -> Self {
         let v = |p: [f64; 3]| Vector3::new(p[0], p[1], p[2]);
         let mut sweep = Sweep {
-            spheres: s.spheres,
-            seen: {
-                // Sorted and unique as written; a file that is not gets its set restored.
-                let mut seen = s.seen;
-                if !seen.par_windows(2).all(|w| w[0] < w[1]) {
-                    seen.sort_unstable();
-                    seen.dedup();
-                }
-                seen
-            },
+            spheres: Spheres::of(&s.spheres, file),
+            seen: Seen::of(&s.seen, file),
             feature_spacing: s.feature_spacing,
             // Derived: one key per feature ball (a ball is kept iff its key is new).
             kept: s
@@ -304,22 +299,23 @@ impl Sweep {
 
     /// The spheres [`Sweep::add_spheres`] adds, in order, and their keys, sorted.
     fn fresh(&self, model: &RobotModel, paths: &[&SweptPath]) -> Fresh {
-        // Every path's first sphere per key, indexed across `paths`; the stable sort merges
-        // the sorted runs and keeps equal keys in path order, so the first is the earliest.
-        let mut fresh: Vec<(SeenKey, u32)> = Vec::new();
         let (mut starts, mut start) = (Vec::with_capacity(paths.len()), 0);
         for p in paths {
             starts.push(start);
-            fresh.extend(p.keys.iter().map(|&(k, i)| (k, start + i)));
             start += p.spheres.len() as u32;
         }
-        fresh.sort_by_key(|e| e.0);
-        fresh.dedup_by_key(|e| e.0);
-        let mut seen = self.seen.iter().peekable();
-        fresh.retain(|(k, _)| {
-            while seen.next_if(|s| *s < k).is_some() {}
-            seen.peek() != Some(&k)
-        });
+        // The keys below the sweep's middle one and the others, each half on a core.
+        let mut fresh = match self.seen.middle() {
+            Some(m) => {
+                let (mut low, high) = rayon::join(
+                    || self.fresh_in(paths, &starts, None, Some(m)),
+                    || self.fresh_in(paths, &starts, Some(m), None),
+                );
+                low.extend(high);
+                low
+            }
+            None => self.fresh_in(paths, &starts, None, None),
+        };
         let keys: Vec<SeenKey> = fresh.iter().map(|e| e.0).collect();
         // Re-visited configurations (the reversal, repeated programs) add nothing new.
         fresh.sort_unstable_by_key(|e| e.1);
@@ -339,10 +335,32 @@ impl Sweep {
         Fresh { keys, spheres }
     }
 
+    /// [`Sweep::fresh`]'s new keys in `[from, to)`, ascending, with the index across `paths`
+    /// (each starting at its `starts` entry) of the earliest sphere of each: the paths' sorted
+    /// runs merged by (key, index), so of equal keys the earliest comes first and is kept, then
+    /// those the sweep has seen dropped, in one pass without a combined array.
+    fn fresh_in(
+        &self,
+        paths: &[&SweptPath],
+        starts: &[u32],
+        from: Option<SeenKey>,
+        to: Option<SeenKey>,
+    ) -> Vec<(SeenKey, u32)> {
+        let runs = paths.iter().zip(starts).map(|(p, &start)| {
+            let at = |bound: Option<SeenKey>, or: usize| {
+                bound.map_or(or, |b| p.keys.partition_point(|e| e.0 < b))
+            };
+            let keys = &p.keys[at(from, 0)..at(to, p.keys.len())];
+            keys.iter().map(move |&(k, i)| (k, start + i))
+        });
+        let merged = runs.kmerge().dedup_by(|a, b| a.0 == b.0);
+        self.seen.unseen(merged, from).collect()
+    }
+
     /// Adds what [`Sweep::fresh`] found: the keys, the spheres, and the feature balls they
     /// thin to.
     fn add_fresh(&mut self, fresh: Fresh) {
-        insert_sorted(&mut self.seen, &fresh.keys);
+        self.seen.insert(&fresh.keys);
         for s in &fresh.spheres {
             if self
                 .kept
@@ -395,25 +413,6 @@ pub(crate) type SeenKey = (i32, i32, i32, u8);
 fn seen_key(s: &PathSphere) -> SeenKey {
     let k = |v: f64| (v / 2e-4).round() as i32;
     (k(s.centre.x), k(s.centre.y), k(s.centre.z), s.sphere)
-}
-
-/// Inserts the sorted keys `new`, none of them in the sorted `seen`, in place: merged from
-/// the back, so only the keys after the first insertion move and no new array is allocated.
-fn insert_sorted(seen: &mut Vec<SeenKey>, new: &[SeenKey]) {
-    let n = seen.len();
-    seen.resize(n + new.len(), (0, 0, 0, 0));
-    // seen[..i] and new[..j] are still to be placed, before seen[i + j..].
-    let (mut i, mut j) = (n, new.len());
-    while j > 0 {
-        let w = i + j - 1;
-        if i > 0 && seen[i - 1] > new[j - 1] {
-            seen[w] = seen[i - 1];
-            i -= 1;
-        } else {
-            seen[w] = new[j - 1];
-            j -= 1;
-        }
-    }
 }
 
 /// The thinning key of a feature ball: its centre on the feature-spacing grid and its radius
@@ -743,7 +742,7 @@ mod tests {
             assert_eq!(sorted.features, reference.features, "batch {batch}");
             let mut keys: Vec<SeenKey> = seen.iter().copied().collect();
             keys.sort_unstable();
-            assert_eq!(sorted.seen, keys, "batch {batch}");
+            assert_eq!(sorted.seen.to_vec(), keys, "batch {batch}");
         }
         // The key grid is 12³ × 3 spheres: most later spheres are duplicates.
         assert!(sorted.spheres.len() > 1000 && sorted.spheres.len() < 12 * 12 * 12 * 3);

@@ -17,7 +17,7 @@ pub type KbFile = Arc<dyn AsRef<[u8]> + Send + Sync>;
 /// A location type's sweep: read, or still in the file.
 #[derive(Clone, Debug)]
 pub(super) enum Slot {
-    Ready(Sweep),
+    Ready(Box<Sweep>),
     Stored(Stored),
 }
 
@@ -56,14 +56,14 @@ impl Slot {
 
     pub fn ready(&self) -> Option<&Sweep> {
         match self {
-            Slot::Ready(s) => Some(s),
+            Slot::Ready(s) => Some(s.as_ref()),
             Slot::Stored(_) => None,
         }
     }
 
     pub fn ready_mut(&mut self) -> Option<&mut Sweep> {
         match self {
-            Slot::Ready(s) => Some(s),
+            Slot::Ready(s) => Some(s.as_mut()),
             Slot::Stored(_) => None,
         }
     }
@@ -88,17 +88,25 @@ impl Slot {
         splat: Option<SplatState>,
     ) {
         match self {
-            Slot::Ready(sweep) => {
-                let paths: Vec<&SweptPath> = paths.iter().map(|p| p.as_ref()).collect();
-                sweep.add_spheres(robot, &paths);
-                sweep.set_splat(splat);
-            }
+            Slot::Ready(sweep) => replay_into(sweep, robot, paths, splat),
             Slot::Stored(s) => {
                 s.added.extend(paths.iter().cloned());
                 s.splat = Some(splat);
             }
         }
     }
+}
+
+/// An addition's rebuild replayed on a read sweep: `paths` added, then `splat` installed.
+fn replay_into(
+    sweep: &mut Sweep,
+    robot: &prf_shared::robot::RobotModel,
+    paths: &[Arc<SweptPath>],
+    splat: Option<SplatState>,
+) {
+    let paths: Vec<&SweptPath> = paths.iter().map(|p| p.as_ref()).collect();
+    sweep.add_spheres(robot, &paths);
+    sweep.set_splat(splat);
 }
 
 impl Learner {
@@ -113,25 +121,53 @@ impl Learner {
     /// Reads the sweep of location type `t` if it is still in the file, and checks that its
     /// next field build's grid is within bounds ([`Learner::check_grid`]).
     pub(super) fn read_sweep(&mut self, t: usize) -> Result<(), KbError> {
-        if let Some(Slot::Stored(s)) = self.sweeps.get(t) {
-            let bytes = (*s.file).as_ref().get(s.range.clone()).unwrap_or_default();
-            let mut read = Slot::Ready(self.sweep_of(t, bytes, s.range.start)?);
-            // The additions' rebuilds kept (paths and splat are kept together by `replay`).
-            if let Some(splat) = &s.splat {
-                read.replay(&self.robot, &s.added, splat.clone());
-            }
-            // A sweep refused by its grid stays unread: a later build is refused again.
-            let stored = std::mem::replace(&mut self.sweeps[t], read);
-            if let Err(e) = self.check_grid(t) {
-                self.sweeps[t] = stored;
-                return Err(e);
-            }
+        match self.decode_stored(t) {
+            Some(read) => self.install(t, read?),
+            None => Ok(()),
+        }
+    }
+
+    /// The sweep of location type `t` decoded from the file, the additions' rebuilds
+    /// replayed, if it is still there (the part of [`Learner::read_sweep`] that only reads
+    /// the learner: it may run beside the lessons, [`Learner::read_ahead`]).
+    pub(super) fn decode_stored(&self, t: usize) -> Option<Result<Sweep, KbError>> {
+        let Some(Slot::Stored(s)) = self.sweeps.get(t) else {
+            return None;
+        };
+        let bytes = (*s.file).as_ref().get(s.range.clone()).unwrap_or_default();
+        Some(
+            self.sweep_of(t, bytes, s.range.start, Some(&s.file))
+                .map(|mut sweep| {
+                    // The additions' rebuilds kept (paths and splat are kept together by `replay`).
+                    if let Some(splat) = &s.splat {
+                        replay_into(&mut sweep, &self.robot, &s.added, splat.clone());
+                    }
+                    sweep
+                }),
+        )
+    }
+
+    /// Puts `sweep`, [`Learner::decode_stored`] of type `t`, in its slot once its next field
+    /// build's grid is within bounds: a sweep refused by its grid stays unread, so a later
+    /// build is refused again.
+    pub(super) fn install(&mut self, t: usize, sweep: Sweep) -> Result<(), KbError> {
+        let stored = std::mem::replace(&mut self.sweeps[t], Slot::Ready(Box::new(sweep)));
+        if let Err(e) = self.check_grid(t) {
+            self.sweeps[t] = stored;
+            return Err(e);
         }
         Ok(())
     }
 
-    /// The sweep of location type `t` in its section `bytes` (at byte `at` of the file).
-    pub(super) fn sweep_of(&self, t: usize, bytes: &[u8], at: usize) -> Result<Sweep, KbError> {
+    /// The sweep of location type `t` in its section `bytes` (at byte `at` of the file), its
+    /// spheres left in `file` if these bytes are its ([`Sweep::from_state`]).
+    pub(super) fn sweep_of(
+        &self,
+        t: usize,
+        bytes: &[u8],
+        at: usize,
+        file: Option<&KbFile>,
+    ) -> Result<Sweep, KbError> {
         let name = self.location_kinds.get(t).cloned().unwrap_or_default();
         let wrong = |why: String| KbError::Sweep {
             location_type: name.clone(),
@@ -140,6 +176,6 @@ impl Learner {
         };
         let st = read_section(bytes).map_err(wrong)?;
         check_sweep(&st, &self.config.workspace).map_err(wrong)?;
-        Ok(Sweep::from_state(st))
+        Ok(Sweep::from_state(st, file))
     }
 }
