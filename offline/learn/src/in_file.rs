@@ -8,7 +8,6 @@
 use crate::kb::{Record, RecordBytes};
 use crate::learn::KbFile;
 use crate::workspace::{SeenKey, SphereSample};
-use rayon::prelude::*;
 use std::borrow::Cow;
 use std::marker::PhantomData;
 use std::ops::Range;
@@ -90,7 +89,7 @@ impl Spheres {
                 stored: Some(stored),
                 added: Vec::new(),
             },
-            None => Spheres::from(decoded(read)),
+            None => Spheres::from(read.decoded()),
         }
     }
 
@@ -141,7 +140,7 @@ impl Spheres {
     /// The spheres as the file's records.
     pub(crate) fn to_records(&self) -> RecordBytes<'static, SphereSample> {
         let stored = self.stored.as_ref().map_or(&[][..], InFile::bytes);
-        RecordBytes::new(Cow::Owned(concat(stored, &self.added)))
+        RecordBytes::written(stored, &self.added)
     }
 }
 
@@ -189,7 +188,7 @@ impl Seen {
                 added: Vec::new(),
             },
             None => {
-                let mut keys = decoded(read);
+                let mut keys = read.decoded();
                 if !ascending {
                     keys.sort_unstable();
                     keys.dedup();
@@ -255,7 +254,7 @@ impl Seen {
 
     /// The keys as the file's records, ascending.
     pub(crate) fn to_records(&self) -> RecordBytes<'static, SeenKey> {
-        RecordBytes::new(Cow::Owned(concat(&[], &self.to_vec())))
+        RecordBytes::written(&[], &self.to_vec())
     }
 }
 
@@ -279,24 +278,6 @@ fn ordinal_of(k: &SeenKey) -> u128 {
 #[inline]
 fn ordinal(b: &[u8]) -> u128 {
     ordinal_of(&SeenKey::get(b))
-}
-
-/// The records of `read`, decoded (on every core).
-fn decoded<T: Record + Send>(read: &RecordBytes<'_, T>) -> Vec<T> {
-    read.0.par_chunks_exact(T::SIZE).map(T::get).collect()
-}
-
-/// `bytes` of records, then the records of `more`.
-fn concat<T: Record + Sync>(bytes: &[u8], more: &[T]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(bytes.len() + more.len() * T::SIZE);
-    out.extend_from_slice(bytes);
-    let at = out.len();
-    out.resize(at + more.len() * T::SIZE, 0);
-    out[at..]
-        .par_chunks_exact_mut(T::SIZE)
-        .zip(more)
-        .for_each(|(b, r)| r.put(b));
-    out
 }
 
 /// Inserts the sorted keys `new`, none of them in the sorted `seen`, in place: merged from
@@ -330,7 +311,7 @@ mod tests {
     /// A file of `records` between a few other bytes, and where they lie in it.
     fn file_of<T: Record + Sync>(records: &[T]) -> (KbFile, Range<usize>) {
         let mut bytes = vec![0xa5; 7];
-        bytes.extend(concat(&[], records));
+        bytes.extend(RecordBytes::written(&[], records).0.iter());
         let range = 7..bytes.len();
         bytes.extend([0x5a; 5]);
         (Arc::new(bytes), range)
@@ -377,7 +358,7 @@ mod tests {
                 let tail = reference.get(from..).unwrap_or_default();
                 assert!(s.iter_from(from).eq(tail.iter().copied()), "from {from}");
             }
-            assert_eq!(s.to_records().0, concat(&[], &reference));
+            assert_eq!(s.to_records(), RecordBytes::written(&[], &reference));
         }
         assert_eq!(left, decoded);
     }

@@ -363,7 +363,33 @@ impl<'a, T: Record> RecordBytes<'a, T> {
     }
 }
 
+impl<T: Record + Sync> RecordBytes<'static, T> {
+    /// The records of `prefix` (whole records, as a file holds them) followed by `items`,
+    /// written on every core.
+    pub fn written(prefix: &[u8], items: &[T]) -> Self {
+        use rayon::prelude::*;
+        let mut out = Vec::with_capacity(prefix.len() + items.len() * T::SIZE);
+        out.extend_from_slice(prefix);
+        let at = out.len();
+        out.resize(at + items.len() * T::SIZE, 0);
+        out[at..]
+            .par_chunks_exact_mut(T::SIZE)
+            .zip(items)
+            .for_each(|(b, r)| r.put(b));
+        RecordBytes::new(std::borrow::Cow::Owned(out))
+    }
+}
+
 impl<T: Record + Sync> RecordBytes<'_, T> {
+    /// The records, decoded on every core.
+    pub fn decoded(&self) -> Vec<T>
+    where
+        T: Send,
+    {
+        use rayon::prelude::*;
+        self.0.par_chunks_exact(T::SIZE).map(T::get).collect()
+    }
+
     /// Whether every record passes `test` (decoded on every core: the example cell's Table
     /// holds 338 k spheres).
     pub fn all(&self, test: impl Fn(&T) -> bool + Sync) -> bool {
@@ -597,8 +623,7 @@ impl Record for u32 {
 
 /// `#[serde(with = "records")]`: a `Vec` of [`Record`]s as one byte string.
 mod records {
-    use super::Record;
-    use rayon::prelude::*;
+    use super::{Record, RecordBytes};
     use serde::de::Error;
     use serde::{Deserialize, Deserializer, Serializer};
 
@@ -606,21 +631,13 @@ mod records {
         items: &[T],
         s: S,
     ) -> Result<S::Ok, S::Error> {
-        let mut out = vec![0; items.len() * T::SIZE];
-        out.par_chunks_exact_mut(T::SIZE)
-            .zip(items)
-            .for_each(|(b, r)| r.put(b));
-        s.serialize_bytes(&out)
+        s.serialize_bytes(&RecordBytes::written(&[], items).0)
     }
 
-    pub fn deserialize<'de, D: Deserializer<'de>, T: Record + Send>(
+    pub fn deserialize<'de, D: Deserializer<'de>, T: Record + Send + Sync>(
         d: D,
     ) -> Result<Vec<T>, D::Error> {
-        let b = <&[u8]>::deserialize(d)?;
-        whole::<D::Error>(b.len(), T::SIZE)?;
-        // In parallel, in place: the example cell's 1.2 M swept spheres and keys are most of
-        // what reading a knowledge base costs.
-        Ok(b.par_chunks_exact(T::SIZE).map(T::get).collect())
+        Ok(RecordBytes::<T>::deserialize(d)?.decoded())
     }
 
     /// Refuses an array of `len` bytes that is not whole `size`-byte records.
