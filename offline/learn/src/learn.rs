@@ -600,6 +600,10 @@ impl Learner {
         &self,
         demos: &[Demonstration],
     ) -> Vec<(usize, Result<Sweep, crate::kb::KbError>)> {
+        // A learner with every sweep read (batch learning) segments no demonstration twice.
+        if self.sweeps.iter().all(|s| s.ready().is_some()) {
+            return Vec::new();
+        }
         let mut types: Vec<usize> = demos
             .iter()
             .flat_map(|d| swept_types_of(&self.location_kinds, d))
