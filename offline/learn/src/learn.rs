@@ -321,12 +321,12 @@ fn lesson(
             .map(|s| s.arm)
             .collect();
         let base = loc.inverse() * arm_base_pose(model, s.base);
-        Ok(Some(Arc::new(SweptPath::new(Sweep::path_spheres(
+        Ok(Some(Arc::new(SweptPath::of(
             model,
             &base,
             &path,
             cfg.workspace.resample,
-        )))))
+        ))))
     };
     let (sweep, arm) = rayon::join(sweep, || arm_lesson(model, d, cfg, m, &inst));
     Ok(Lesson {
