@@ -6,6 +6,7 @@
 use crate::line_of;
 use prf_shared::NA;
 use prf_shared::robot::RobotModel;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -455,7 +456,8 @@ pub fn parse_task(
 }
 
 /// The trajectory CSV in `text` (read from `path`), checked: header, numbers, time strictly
-/// increasing, joint limits, gripper in [0, 1], at least two samples.
+/// increasing, joint limits, gripper in [0, 1], at least two samples. The rows' numbers are
+/// parsed on all cores, then checked in order: the first fault by line is the one reported.
 pub fn parse_trajectory(
     path: &Path,
     text: &str,
@@ -476,13 +478,13 @@ pub fn parse_trajectory(
             },
         ));
     }
-    let mut samples: Vec<Sample> = Vec::new();
-    for (line_no, line) in lines {
-        if line.trim().is_empty() {
-            continue;
-        }
+    let rows: Vec<(usize, &str)> = lines.filter(|(_, l)| !l.trim().is_empty()).collect();
+    let numbers: Vec<Result<[f64; 12], ErrorKind>> =
+        rows.par_iter().map(|(_, line)| parse_row(line)).collect();
+    let mut samples: Vec<Sample> = Vec::with_capacity(rows.len());
+    for (&(line_no, _), v) in rows.iter().zip(numbers) {
         let at = |kind| err(path, Some(line_no), kind);
-        let v = parse_row(line).map_err(at)?;
+        let v = v.map_err(at)?;
         let s = Sample {
             t: v[0],
             base: [v[1], v[2], v[3]],
