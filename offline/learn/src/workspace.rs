@@ -344,7 +344,8 @@ impl SweptPath {
     /// The spheres of a configuration path (`arm` joint samples, arm base at `arm_base` in
     /// the location frame), re-sampled so no centre moves more than `step`, in order. A
     /// sphere whose key is that of the same robot sphere one configuration earlier (near the
-    /// base, or at rest; about 45 % of a lesson's) is left out: it can never be new.
+    /// base, or at rest; 24 % of each of d063's two arm lessons) is left out: it can never be
+    /// new.
     pub fn of(model: &RobotModel, arm_base: &Pose, arm: &[[f64; 7]], step: f64) -> Self {
         let n = model.spheres.len();
         let centres = |q: &JointVector| {
@@ -412,7 +413,8 @@ impl SweptPath {
 
 /// Sorts a path's keys (each with the index of its sphere, ascending) by key and keeps the
 /// earliest of equal ones. Where the path's extent allows ([`Packing`]), key and index are
-/// sorted as one `u64`, about 3.5 × faster than the tuples they stand for.
+/// sorted as one `u64`: for d063's two arm lessons 26.4 M instructions with the packing,
+/// against 43.2 M sorting the tuples (`valgrind --tool=callgrind` of `prf learn --add`).
 fn sort_unique(keys: &mut Vec<(SeenKey, u32)>) {
     let Some(p) = Packing::of(keys) else {
         keys.sort_unstable();
