@@ -59,6 +59,24 @@ pub fn round(x: f64) -> f64 {
     }
 }
 
+/// `round(x) as i32` (halves away from zero; saturating; NaN → 0) without a call to the
+/// software [`round`]: the remainder of the truncation decides. It is exact: below 2^52,
+/// x − trunc(x) is (Sterbenz), and from 2^52 on every f64 is an integer.
+#[inline(always)]
+pub fn round_i32(x: f64) -> i32 {
+    // Truncated toward zero, saturating at i64's ends, NaN → 0.
+    let t = x as i64;
+    let r = x - t as f64;
+    let n = if r >= 0.5 {
+        t.saturating_add(1)
+    } else if r <= -0.5 {
+        t.saturating_sub(1)
+    } else {
+        t
+    };
+    n.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+}
+
 /// |v|: nalgebra's `norm` (the square root of the same sum of squares) through [`sqrt`].
 #[inline(always)]
 pub fn norm(v: &Vector3<f64>) -> f64 {
@@ -150,6 +168,62 @@ mod tests {
     /// The distance in ulps between `a` and `b`, both positive.
     fn ulps(a: f64, b: f64) -> u64 {
         a.to_bits().abs_diff(b.to_bits())
+    }
+
+    /// The same integer as `round(x) as i32` on halves, values just below them, the ends of
+    /// i32, i64 and f64, NaN, infinities and 3 million random values.
+    #[test]
+    fn round_i32_is_round_then_cast() {
+        use super::{round, round_i32};
+        let same = |x: f64| assert_eq!(round_i32(x), round(x) as i32, "{x:e}");
+        let below_half = 0.5 - f64::EPSILON / 4.0;
+        for k in [
+            0.0,
+            1.0,
+            2.0,
+            3.0,
+            1e6,
+            4503599627370495.0,
+            4503599627370496.0,
+        ] {
+            for x in [k + 0.5, k + below_half, k - 0.5, k + 0.25, k] {
+                same(x);
+                same(-x);
+            }
+        }
+        for x in [
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            2147483647.4,
+            2147483647.5,
+            -2147483648.5,
+            -2147483648.6,
+            9.3e18,
+            -9.3e18,
+            i64::MAX as f64,
+            (i64::MAX as f64).next_down(),
+            i64::MIN as f64,
+            (i64::MIN as f64).next_up(),
+            f64::MAX,
+            f64::MIN,
+            f64::MIN_POSITIVE,
+            -0.0,
+        ] {
+            same(x);
+        }
+        let mut s: u64 = 0x9e37_79b9_7f4a_7c15;
+        for i in 0..3_000_000 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            same(match i % 3 {
+                // Any bit pattern; centres on the 0.2 mm grid of a cell; halves.
+                0 => f64::from_bits(s),
+                1 => (s as i64 as f64) / 9.3e15,
+                _ => (s % 2_000_001) as f64 / 2.0 - 500_000.0,
+            });
+        }
     }
 
     /// Within 2 ulp of libm's exp (itself within 1 ulp of e^x) over the range, in the

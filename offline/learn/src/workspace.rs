@@ -27,7 +27,7 @@ use prf_shared::JointVector;
 use prf_shared::field::{
     BRICK, BRICK_NODES, Field, FieldData, MM, NODE_BYTES, OFFSET_UNIT, UNIFORM,
 };
-use prf_shared::kinematics::ArmKinematics;
+use prf_shared::kinematics::Chain;
 use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
 use rustc_hash::FxHashSet;
@@ -348,9 +348,10 @@ impl SweptPath {
     /// new.
     pub fn of(model: &RobotModel, arm_base: &Pose, arm: &[[f64; 7]], step: f64) -> Self {
         let n = model.spheres.len();
+        let chain = Chain::new(model);
         let centres = |q: &JointVector| {
             let mut c = [Vector3::zeros(); MAX_SPHERES];
-            ArmKinematics::new(model, q).sphere_centres(model, &mut c);
+            chain.kinematics(model, q).sphere_centres(model, &mut c);
             c
         };
         let mut spheres = Vec::with_capacity(arm.len() * n);
@@ -516,7 +517,7 @@ pub(crate) type SeenKey = (i32, i32, i32, u8);
 
 /// [`SeenKey`] of `s`.
 fn seen_key(s: &PathSphere) -> SeenKey {
-    let k = |v: f64| (v / 2e-4).round() as i32;
+    let k = |v: f64| prf_shared::float::round_i32(v / 2e-4);
     (k(s.centre.x), k(s.centre.y), k(s.centre.z), s.sphere)
 }
 
@@ -912,7 +913,8 @@ mod tests {
         let mut every = Vec::new();
         for q in &arm {
             let mut c = [Vector3::zeros(); MAX_SPHERES];
-            ArmKinematics::new(&model, &JointVector::from(*q)).sphere_centres(&model, &mut c);
+            prf_shared::kinematics::ArmKinematics::new(&model, &JointVector::from(*q))
+                .sphere_centres(&model, &mut c);
             for (j, c) in c[..model.spheres.len()].iter().enumerate() {
                 every.push(PathSphere {
                     centre: base.transform_point(&(*c).into()).coords,
