@@ -849,7 +849,7 @@ impl Learner {
     }
 
     /// The learner of a knowledge base's core, its sweeps empty.
-    fn from_state(st: crate::kb::LearnerState) -> Result<Self, crate::kb::KbError> {
+    fn from_state(mut st: crate::kb::LearnerState) -> Result<Self, crate::kb::KbError> {
         use crate::kb::*;
         let class = |name: &str| {
             CLASSES
@@ -883,14 +883,16 @@ impl Learner {
                 st.part_types.len()
             )));
         }
+        // The fields and the arms' paths are moved out of the decoded state, not copied.
         let mut location_types = Vec::new();
-        for (name, (stances, field, instances)) in st.location_kinds.iter().zip(&st.location_types)
+        let kinds = st.location_kinds.iter();
+        for (name, (stances, field, instances)) in kinds.zip(std::mem::take(&mut st.location_types))
         {
             location_types.push(LocationTypeKnowledge {
                 name: name.clone(),
-                stances: affordances(stances)?,
-                field: field.clone(),
-                instances: *instances,
+                stances: affordances(&stances)?,
+                field,
+                instances,
             });
         }
         let mut part_types = Vec::new();
@@ -901,13 +903,13 @@ impl Learner {
             });
         }
         let mut arms = Vec::new();
-        for a in &st.arms {
+        for a in std::mem::take(&mut st.arms) {
             arms.push(ArmSkill {
                 rdmp: a
                     .rdmp
                     .rdmp()
                     .ok_or_else(|| KbError::Decode("an RDMP's weights are cut short".into()))?,
-                path: a.path.clone(),
+                path: a.path,
                 dt: a.dt,
             });
         }
