@@ -105,6 +105,15 @@ pub struct ArmMeter {
     ratios: LimitRatios,
 }
 
+/// The backward differences of a stream at a sample: velocity, acceleration and jerk per
+/// joint, computed once per sample for both its rating and its record.
+#[derive(Clone, Copy, Debug, Default)]
+struct Differences {
+    v: [f64; NA],
+    a: [f64; NA],
+    jerk: [f64; NA],
+}
+
 impl ArmMeter {
     /// A meter for a stream that starts at rest at `q0`, sampled every `dt` seconds.
     pub fn at_rest(limits: &MotionLimits, dt: f64, q0: &[f64; NA]) -> Self {
@@ -128,51 +137,61 @@ impl ArmMeter {
 
     /// The ratios of `q` alone as the next sample (nothing is recorded).
     pub fn rate(&self, q: &[f64; NA]) -> LimitRatios {
+        self.rate_next(q, &self.next(q))
+    }
+
+    /// The backward differences (velocity, acceleration, jerk) with `q` as the next sample.
+    fn next(&self, q: &[f64; NA]) -> Differences {
         let h = 1.0 / self.dt;
+        let mut d = Differences::default();
+        for j in 0..NA {
+            d.v[j] = (q[j] - self.q[j]) * h;
+            d.a[j] = (d.v[j] - self.v[j]) * h;
+            d.jerk[j] = (d.a[j] - self.a[j]) * h;
+        }
+        d
+    }
+
+    /// The ratios of the next sample `q`, whose differences are `d`.
+    fn rate_next(&self, q: &[f64; NA], d: &Differences) -> LimitRatios {
         let mut r = LimitRatios::default();
         for j in 0..NA {
-            let v = (q[j] - self.q[j]) * h;
-            let a = (v - self.v[j]) * h;
-            let jerk = (a - self.a[j]) * h;
             r.position = nan_max(
                 r.position,
                 f64::abs(q[j] - self.middle[j]) * self.inv_range[j],
             );
-            r.speed = nan_max(r.speed, f64::abs(v) * self.inv_speed[j]);
-            r.acceleration = nan_max(r.acceleration, f64::abs(a) * self.inv_acceleration[j]);
-            r.jerk = nan_max(r.jerk, f64::abs(jerk) * self.inv_jerk[j]);
+            r.speed = nan_max(r.speed, f64::abs(d.v[j]) * self.inv_speed[j]);
+            r.acceleration = nan_max(r.acceleration, f64::abs(d.a[j]) * self.inv_acceleration[j]);
+            r.jerk = nan_max(r.jerk, f64::abs(d.jerk[j]) * self.inv_jerk[j]);
         }
         r
     }
 
     /// Rates the next sample.
     pub fn push(&mut self, q: &[f64; NA]) {
-        let r = self.rate(q);
-        self.record(q, &r);
+        let d = self.next(q);
+        let r = self.rate_next(q, &d);
+        self.record(q, &d, &r);
     }
 
     /// Records `q` as the next sample if it keeps every limit (true); otherwise the meter is
     /// left as it was (false).
     pub fn try_push(&mut self, q: &[f64; NA]) -> bool {
-        let r = self.rate(q);
+        let d = self.next(q);
+        let r = self.rate_next(q, &d);
         let ok = r.within();
         if ok {
-            self.record(q, &r);
+            self.record(q, &d, &r);
         }
         ok
     }
 
-    /// Takes `q`, whose ratios are `r`, as the next sample.
-    fn record(&mut self, q: &[f64; NA], r: &LimitRatios) {
-        let h = 1.0 / self.dt;
-        for j in 0..NA {
-            let v = (q[j] - self.q[j]) * h;
-            let a = (v - self.v[j]) * h;
-            self.jerk[j] = (a - self.a[j]) * h;
-            self.a[j] = a;
-            self.v[j] = v;
-        }
+    /// Takes `q`, whose differences are `d` and ratios `r`, as the next sample.
+    fn record(&mut self, q: &[f64; NA], d: &Differences, r: &LimitRatios) {
         self.q = *q;
+        self.v = d.v;
+        self.a = d.a;
+        self.jerk = d.jerk;
         let m = &mut self.ratios;
         m.position = nan_max(m.position, r.position);
         m.speed = nan_max(m.speed, r.speed);
