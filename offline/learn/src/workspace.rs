@@ -356,15 +356,15 @@ impl SweptPath {
         };
         let mut spheres = Vec::with_capacity(arm.len() * n);
         let mut keys = Vec::with_capacity(arm.len() * n);
-        let mut last = [None; MAX_SPHERES];
+        let mut last = LastKeys::default();
         let mut put = |c: &[Vector3<f64>]| {
-            for (j, (c, last)) in c.iter().zip(&mut last).enumerate() {
+            for (j, c) in c.iter().enumerate() {
                 let s = PathSphere {
                     centre: arm_base.transform_point(&(*c).into()).coords,
                     sphere: j as u8,
                 };
                 let key = seen_key(&s);
-                if last.replace(key) != Some(key) {
+                if last.moved(&s, key) {
                     keys.push((key, spheres.len() as u32));
                     spheres.push(s);
                 }
@@ -399,16 +399,33 @@ impl SweptPath {
     /// The path of `spheres` as stored ([`SweptPath::of`]'s, or from before it left out
     /// repeated spheres: those are left out of the keys here).
     pub fn new(spheres: Vec<PathSphere>) -> Self {
-        let mut last = [None; 256];
+        let mut last = LastKeys::default();
         let mut keys: Vec<(SeenKey, u32)> = Vec::with_capacity(spheres.len());
         for (i, s) in spheres.iter().enumerate() {
             let key = seen_key(s);
-            if last[s.sphere as usize].replace(key) != Some(key) {
+            if last.moved(s, key) {
                 keys.push((key, i as u32));
             }
         }
         sort_unique(&mut keys);
         SweptPath { spheres, keys }
+    }
+}
+
+/// The last key of each robot sphere along a path.
+struct LastKeys([Option<SeenKey>; 256]);
+
+impl Default for LastKeys {
+    fn default() -> Self {
+        LastKeys([None; 256])
+    }
+}
+
+impl LastKeys {
+    /// Whether `key` of `s` differs from its robot sphere's last one, which it becomes: a
+    /// sphere that repeats it (near the base, or at rest) can never be new.
+    fn moved(&mut self, s: &PathSphere, key: SeenKey) -> bool {
+        self.0[usize::from(s.sphere)].replace(key) != Some(key)
     }
 }
 
