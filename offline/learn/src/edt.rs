@@ -2,6 +2,8 @@
 //! "Distance Transforms of Sampled Functions", 2012): D(p) = min_q (|p − q|² + f(q)) on a
 //! regular grid, separable into 1-D lower envelopes of parabolas, linear time per axis.
 
+use rayon::prelude::*;
+
 /// Stands for +∞ in inputs (no site); kept finite so the envelope arithmetic stays exact.
 pub const FAR: f64 = 1e20;
 
@@ -46,28 +48,90 @@ fn transform_1d(f: &[f64], d: &mut [f64], v: &mut [usize], z: &mut [f64]) {
 
 /// 3-D transform in place of `f` on a grid of `dims` nodes (x-major: index
 /// (i·ny + j)·nz + k), in squared grid units. Sites have finite values (0 for plain
-/// distance), non-sites [`FAR`].
+/// distance), non-sites [`FAR`]. One axis after the other, each axis's lines transformed in
+/// parallel (each line alike whichever thread takes it: the same bits as one at a time).
 pub fn transform_3d(f: &mut [f64], dims: [usize; 3]) {
     let [nx, ny, nz] = dims;
     assert_eq!(f.len(), nx * ny * nz, "grid size");
-    let n = nx.max(ny).max(nz);
-    let (mut line, mut out) = (vec![0.0; n], vec![0.0; n]);
-    let (mut v, mut z) = (vec![0usize; n], vec![0.0; n + 1]);
-    let mut pass =
-        |len: usize, count: usize, index: &dyn Fn(usize, usize) -> usize, f: &mut [f64]| {
-            for c in 0..count {
-                for t in 0..len {
-                    line[t] = f[index(c, t)];
-                }
-                transform_1d(&line[..len], &mut out[..len], &mut v, &mut z);
-                for t in 0..len {
-                    f[index(c, t)] = out[t];
-                }
+    if f.is_empty() {
+        return;
+    }
+    // Along z: each line is a contiguous run.
+    f.par_chunks_mut(nz)
+        .for_each_init(|| Lines::new(nz), |l, line| l.transform(line, 0, 1, nz));
+    // Along y: each x slab holds its lines, nz apart.
+    f.par_chunks_mut(ny * nz).for_each_init(
+        || Lines::new(ny),
+        |l, slab| {
+            for k in 0..nz {
+                l.transform(slab, k, nz, ny);
             }
-        };
-    pass(nz, nx * ny, &|c, t| c * nz + t, f);
-    pass(ny, nx * nz, &|c, t| ((c / nz) * ny + t) * nz + c % nz, f);
-    pass(nx, ny * nz, &|c, t| (t * ny + c / nz) * nz + c % nz, f);
+        },
+    );
+    // Along x: a line crosses every slab, so each (j, k) line is transformed into `across`
+    // (j-major, then k, then i), which the slabs then read back.
+    let mut across = vec![0.0; f.len()];
+    let read: &[f64] = f;
+    across.par_chunks_mut(nz * nx).enumerate().for_each_init(
+        || Lines::new(nx),
+        |l, (j, row)| {
+            for k in 0..nz {
+                l.load(nx, |t| read[(t * ny + j) * nz + k]);
+                l.run(nx);
+                row[k * nx..(k + 1) * nx].copy_from_slice(&l.out[..nx]);
+            }
+        },
+    );
+    f.par_chunks_mut(ny * nz).enumerate().for_each(|(i, slab)| {
+        for (jk, v) in slab.iter_mut().enumerate() {
+            *v = across[jk * nx + i];
+        }
+    });
+}
+
+/// One thread's buffers for [`transform_1d`] of lines up to a length.
+struct Lines {
+    line: Vec<f64>,
+    out: Vec<f64>,
+    v: Vec<usize>,
+    z: Vec<f64>,
+}
+
+impl Lines {
+    fn new(n: usize) -> Self {
+        Lines {
+            line: vec![0.0; n],
+            out: vec![0.0; n],
+            v: vec![0; n],
+            z: vec![0.0; n + 1],
+        }
+    }
+
+    /// Reads a line of `len` values, value t from `at(t)`.
+    fn load(&mut self, len: usize, at: impl Fn(usize) -> f64) {
+        for (t, x) in self.line[..len].iter_mut().enumerate() {
+            *x = at(t);
+        }
+    }
+
+    /// Transforms the loaded line into `out`.
+    fn run(&mut self, len: usize) {
+        transform_1d(
+            &self.line[..len],
+            &mut self.out[..len],
+            &mut self.v,
+            &mut self.z,
+        );
+    }
+
+    /// Transforms in place the line of `len` values of `data` from `start`, `stride` apart.
+    fn transform(&mut self, data: &mut [f64], start: usize, stride: usize, len: usize) {
+        self.load(len, |t| data[start + t * stride]);
+        self.run(len);
+        for (t, x) in self.out[..len].iter().enumerate() {
+            data[start + t * stride] = *x;
+        }
+    }
 }
 
 #[cfg(test)]
