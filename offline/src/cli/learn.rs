@@ -178,9 +178,14 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
     let blob = compile(&k)?;
     let t_compile = t2.elapsed().as_secs_f64();
     let t3 = Instant::now();
-    prf_files::atomic::write(&a.output, &blob)
-        .with_context(|| format!("writing {}", a.output.display()))?;
-    let kb_write = write_kb(kb, bytes, &mut learner, &lessons, part)
+    // The addition is encoded while the blob is written and synced; the knowledge base is
+    // appended to only once the blob is written.
+    let (written, record) = rayon::join(
+        || prf_files::atomic::write(&a.output, &blob),
+        || learner.addition_with(&lessons, part),
+    );
+    written.with_context(|| format!("writing {}", a.output.display()))?;
+    let kb_write = write_kb(kb, bytes, &mut learner, &record)
         .with_context(|| format!("writing {}", kb.display()))?;
     let t_write = t3.elapsed().as_secs_f64();
     if !a.quiet {
@@ -228,17 +233,15 @@ fn map(path: &std::path::Path) -> std::io::Result<memmap2::Mmap> {
     }
 }
 
-/// Writes the knowledge base `kb` (read as `read`) after `lessons` were added: their addition
-/// appended, or the whole state rewritten as a new base when [`prf_learn::kb::rewrite_instead`]
-/// says why. Says which.
+/// Writes the knowledge base `kb` (read as `read`) after lessons were added: their addition
+/// `record` appended, or the whole state rewritten as a new base when
+/// [`prf_learn::kb::rewrite_instead`] says why. Says which.
 fn write_kb(
     kb: &std::path::Path,
     read: &[u8],
     learner: &mut Learner,
-    lessons: &[prf_learn::learn::Lessons],
-    part: prf_learn::kb::LessonsPart,
+    record: &prf_learn::kb::AdditionRecord,
 ) -> anyhow::Result<String> {
-    let record = learner.addition_with(lessons, part);
     let mb = |n: usize| n as f64 / 1e6;
     if let Some(why) = prf_learn::kb::rewrite_instead(read, record.len()) {
         let whole = learner.save()?;
