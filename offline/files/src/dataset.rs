@@ -525,12 +525,32 @@ pub fn parse_trajectory(
     Ok(samples)
 }
 
+/// The comma-separated fields of `line`, as `line.split(',')` gives them, found byte by byte:
+/// a row's fields are a few bytes long, shorter than pays for a `memchr` per field (the
+/// split took 11.5 M of the 28 M instructions of parsing d063's 5,080 rows).
+fn fields(line: &str) -> impl Iterator<Item = &str> {
+    let mut rest = Some(line);
+    std::iter::from_fn(move || {
+        let r = rest?;
+        match r.bytes().position(|b| b == b',') {
+            Some(i) => {
+                rest = Some(&r[i + 1..]);
+                Some(&r[..i])
+            }
+            None => {
+                rest = None;
+                Some(r)
+            }
+        }
+    })
+}
+
 /// The 12 numbers of one trajectory row, each finite; a row with another number of columns
 /// is refused first (nothing is allocated unless the row is refused). One pass over the row:
 /// its columns are counted again only when it is refused.
 fn parse_row(line: &str) -> Result<[f64; 12], ErrorKind> {
     let mut v = [0.0; 12];
-    let mut fields = line.split(',');
+    let mut fields = fields(line);
     let (mut parsed, mut first_error) = (0, None);
     for ((x, column), f) in v.iter_mut().zip(CSV_HEADER).zip(fields.by_ref()) {
         parsed += 1;
@@ -589,6 +609,43 @@ pub fn trajectory_csv(samples: &[Sample]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `fields` splits as `str::split(',')`: empty lines and fields, commas at either end,
+    /// multi-byte characters beside commas, and random lines over a small alphabet.
+    #[test]
+    fn fields_split_as_str_split() {
+        let same = |line: &str| {
+            let got: Vec<&str> = fields(line).collect();
+            let want: Vec<&str> = line.split(',').collect();
+            assert_eq!(got, want, "{line:?}");
+        };
+        for line in [
+            "",
+            ",",
+            ",,",
+            "a",
+            "a,",
+            ",a",
+            "1.5,-2,,x",
+            "é,ü€,,😀",
+            " , ,",
+        ] {
+            same(line);
+        }
+        let alphabet = [",", "1", ".", "-", " ", "é", "€"];
+        let mut s: u64 = 0x9e37_79b9_7f4a_7c15;
+        for _ in 0..2_000 {
+            let mut line = String::new();
+            for _ in 0..(s % 17) {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                line.push_str(alphabet[(s % alphabet.len() as u64) as usize]);
+            }
+            s = s.wrapping_add(1);
+            same(&line);
+        }
+    }
 
     /// A row's column count is judged before its numbers, in one pass or two.
     #[test]
