@@ -61,20 +61,19 @@ pub fn round(x: f64) -> f64 {
 
 /// `round(x) as i32` (halves away from zero; saturating; NaN → 0) without a call to the
 /// software [`round`]: the remainder of the truncation decides. It is exact: below 2^52,
-/// x − trunc(x) is (Sterbenz), and from 2^52 on every f64 is an integer.
+/// x − trunc(x) is (Sterbenz), and from 2^52 on every f64 is an integer. Without branches:
+/// the remainder's comparisons are unpredictable (a swept sphere's key rounds its centre's
+/// coordinates, and branches on them cost `prf learn --add` more than the divisions did).
 #[inline(always)]
 pub fn round_i32(x: f64) -> i32 {
-    // Truncated toward zero, saturating at i64's ends, NaN → 0.
+    const LOW: i64 = i32::MIN as i64;
+    const HIGH: i64 = i32::MAX as i64;
+    // Truncated toward zero, saturating at i64's ends, NaN → 0; then held one beyond i32's
+    // ends, where the remainder's step of one away from zero still saturates.
     let t = x as i64;
     let r = x - t as f64;
-    let n = if r >= 0.5 {
-        t.saturating_add(1)
-    } else if r <= -0.5 {
-        t.saturating_sub(1)
-    } else {
-        t
-    };
-    n.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+    let n = t.clamp(LOW - 1, HIGH + 1) + i64::from(r >= 0.5) - i64::from(r <= -0.5);
+    n.clamp(LOW, HIGH) as i32
 }
 
 /// |v|: nalgebra's `norm` (the square root of the same sum of squares) through [`sqrt`].
