@@ -269,7 +269,7 @@ impl std::fmt::Debug for Seen {
 
 /// A [`SeenKey`] as an integer in the same order: x, y, z offset to unsigned, then the
 /// sphere index (104 bits).
-fn ordinal_of(k: &SeenKey) -> u128 {
+pub(crate) fn ordinal_of(k: &SeenKey) -> u128 {
     let u = |v: i32| (v as u32 ^ 0x8000_0000) as u128;
     u(k.0) << 72 | u(k.1) << 40 | u(k.2) << 8 | k.3 as u128
 }
