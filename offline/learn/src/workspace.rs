@@ -414,7 +414,6 @@ impl SweptPath {
 
 /// A run of sorted keys: ascending, without repeats, each key with the index of its
 /// sphere, the indices offset by `start` (distinct across the runs merged together).
-#[derive(Clone)]
 struct Run<'a> {
     keys: std::borrow::Cow<'a, [(SeenKey, u32)]>,
     start: u32,
