@@ -680,8 +680,8 @@ pub(crate) fn section(sweep: &SweepState<'_>) -> Vec<u8> {
 }
 
 /// The lessons of an addition (`AdditionState::lessons`) in postcard: the record's first
-/// field, encoded on its own so that `prf learn --add` can encode it while the fields are
-/// rebuilt. Its buffer is reserved for the long arrays at once (`lessons_bound`).
+/// field, encoded on its own ([`AdditionRecord`]). Its buffer is reserved for the long arrays
+/// at once (`lessons_bound`).
 pub struct LessonsPart(Vec<u8>);
 
 /// [`LessonsPart`] of `lessons`.

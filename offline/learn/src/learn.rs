@@ -19,7 +19,6 @@ use std::time::Instant;
 mod journal;
 mod stored;
 
-pub use journal::lessons_part;
 pub use stored::KbFile;
 use stored::Slot;
 
@@ -232,28 +231,74 @@ fn line(k: usize) -> usize {
     k + 2
 }
 
-/// Alg. 3, lines 5–16 for one demonstration, with the location and part types named in
-/// `kinds` and `part_kinds`: its instances segmented per class, then each one's lesson (in
-/// parallel; in instance order, the first error in that order reported).
-fn lessons(
+/// A demonstration's lesson part that failed: the index of the instance it failed on, and why.
+type Failed = (usize, LearnError);
+
+/// Alg. 3, lines 5–11 for one demonstration, with the location and part types named in
+/// `kinds` and `part_kinds`: its instances segmented per class, then each one's affordance
+/// and swept spheres (in parallel), its arm motion left to [`arm_lessons`]. The first
+/// failure in instance order.
+fn shapes(
     model: &RobotModel,
     kinds: &[String],
     part_kinds: &[String],
     d: &Demonstration,
     cfg: &LearnConfig,
-) -> Result<Vec<Lesson>, LearnError> {
-    let part_type = part_kinds
-        .iter()
-        .position(|k| *k == d.task.part.kind)
-        .ok_or_else(|| LearnError::PartType {
-            demonstration: d.id.clone(),
-            kind: d.task.part.kind.clone(),
-        })?;
-    let per_instance: Vec<Result<Lesson, LearnError>> = instances(d)
+) -> Result<Lessons, Failed> {
+    let Some(part_type) = part_kinds.iter().position(|k| *k == d.task.part.kind) else {
+        let (demonstration, kind) = (d.id.clone(), d.task.part.kind.clone());
+        return Err((
+            0,
+            LearnError::PartType {
+                demonstration,
+                kind,
+            },
+        ));
+    };
+    let per_instance: Vec<Result<Lesson, Failed>> = instances(d)
         .into_par_iter()
-        .map(|(m, inst)| lesson(model, kinds, d, cfg, m, inst, part_type))
+        .enumerate()
+        .map(|(i, (m, inst))| shape(model, kinds, d, cfg, m, inst, part_type).map_err(|e| (i, e)))
+        .collect();
+    Ok(Lessons {
+        demonstration: d.id.clone(),
+        fingerprint: fingerprint(d),
+        lessons: per_instance.into_iter().collect::<Result<_, _>>()?,
+    })
+}
+
+/// Alg. 3, lines 12–16 for one demonstration: the trained RDMP of each of its instances
+/// ([`arm_lesson`]), in instance order; the first failure in that order.
+fn arm_lessons(
+    model: &RobotModel,
+    d: &Demonstration,
+    cfg: &LearnConfig,
+) -> Result<Vec<Option<ArmLesson>>, Failed> {
+    let per_instance: Vec<Result<Option<ArmLesson>, Failed>> = instances(d)
+        .into_par_iter()
+        .enumerate()
+        .map(|(i, (m, inst))| arm_lesson(model, d, cfg, m, &inst).map_err(|e| (i, e)))
         .collect();
     per_instance.into_iter().collect()
+}
+
+/// A demonstration's lessons from its [`shapes`] and [`arm_lessons`]; if either failed, the
+/// failure on the earlier instance, its shape's before its arm's (what learning the
+/// instances one by one would report).
+fn joined(
+    shapes: Result<Lessons, Failed>,
+    arms: Result<Vec<Option<ArmLesson>>, Failed>,
+) -> Result<Lessons, LearnError> {
+    match (shapes, arms) {
+        (Ok(mut lessons), Ok(arms)) => {
+            for (l, arm) in lessons.lessons.iter_mut().zip(arms) {
+                l.arm = arm;
+            }
+            Ok(lessons)
+        }
+        (Err((i, e)), Err((j, _))) if i <= j => Err(e),
+        (_, Err((_, e))) | (Err((_, e)), _) => Err(e),
+    }
 }
 
 /// Alg. 3 line 5 for demonstration `d`: every instance of every class, class by class.
@@ -285,9 +330,9 @@ fn swept_types_of(kinds: &[String], d: &Demonstration) -> Vec<usize> {
     types
 }
 
-/// The lesson of instance `inst` of class `m` in demonstration `d`: its affordance, the
-/// spheres it sweeps and its trained RDMP (these two at once, on whichever core is free).
-fn lesson(
+/// The lesson of instance `inst` of class `m` in demonstration `d` but for its arm motion:
+/// its affordance and the spheres it sweeps.
+fn shape(
     model: &RobotModel,
     kinds: &[String],
     d: &Demonstration,
@@ -307,35 +352,35 @@ fn lesson(
         (Some(r), Some(a)) => Some((fr.affordance, a.inverse() * r)),
         _ => None,
     };
-    let sweep = || -> Result<_, LearnError> {
-        let Some(l) = swept_location(m, &inst) else {
-            return Ok(None);
-        };
-        let loc = pose_from_array(location_of(d, l).pose).ok_or_else(|| LearnError::BadPose {
-            demonstration: d.id.clone(),
-            what: "location",
-        })?;
-        let s = &d.samples[inst.at];
-        let path: Vec<[f64; 7]> = d.samples[inst.range.clone()]
-            .iter()
-            .map(|s| s.arm)
-            .collect();
-        let base = loc.inverse() * arm_base_pose(model, s.base);
-        Ok(Some(Arc::new(SweptPath::of(
-            model,
-            &base,
-            &path,
-            cfg.workspace.resample,
-        ))))
+    let sweep = match swept_location(m, &inst) {
+        None => None,
+        Some(l) => {
+            let loc =
+                pose_from_array(location_of(d, l).pose).ok_or_else(|| LearnError::BadPose {
+                    demonstration: d.id.clone(),
+                    what: "location",
+                })?;
+            let s = &d.samples[inst.at];
+            let path: Vec<[f64; 7]> = d.samples[inst.range.clone()]
+                .iter()
+                .map(|s| s.arm)
+                .collect();
+            let base = loc.inverse() * arm_base_pose(model, s.base);
+            Some(Arc::new(SweptPath::of(
+                model,
+                &base,
+                &path,
+                cfg.workspace.resample,
+            )))
+        }
     };
-    let (sweep, arm) = rayon::join(sweep, || arm_lesson(model, d, cfg, m, &inst));
     Ok(Lesson {
         class: m.name(),
         location_type,
         part_type,
         affordance,
-        sweep: sweep?,
-        arm: arm?,
+        sweep,
+        arm: None,
     })
 }
 
@@ -428,75 +473,56 @@ pub fn learn_into(
 }
 
 /// [`learn_into`], also giving the demonstrations' lessons (for [`Learner::addition`]).
+///
+/// TrainRDMP (Alg. 3 lines 12–16, pacing most of it) runs beside the rest, which does not
+/// wait for the skills: the affordances and swept spheres (lines 5–11, beside them the stored
+/// sweeps they grow read from the file), added in dataset order, then the fields of the types
+/// they touch rebuilt. The skills are added last, in the same order, so the state is what
+/// adding the lessons one by one gives. On an error the learner is left part-way (its
+/// sweeps may have grown without the skills): drop it.
 pub fn learn_lessons_into(
     learner: &mut Learner,
     demos: &[Demonstration],
     progress: OnProgress<'_>,
 ) -> Result<(Knowledge, Vec<Lessons>), LearnError> {
-    learn_lessons_into_with(learner, demos, progress, |_| ()).map(|(k, l, ())| (k, l))
-}
-
-/// [`learn_lessons_into`], running `beside` on the lessons while the fields they touch are
-/// rebuilt (on whichever core is free) and giving its result too: `prf learn --add` encodes
-/// their part of the addition record there ([`lessons_part`]).
-pub fn learn_lessons_into_with<R: Send>(
-    learner: &mut Learner,
-    demos: &[Demonstration],
-    progress: OnProgress<'_>,
-    beside: impl FnOnce(&[Lessons]) -> R + Send,
-) -> Result<(Knowledge, Vec<Lessons>, R), LearnError> {
     progress(Progress::Total(
         (demos.len() + learner.location_kinds.len()) as u64,
     ));
-    let t0 = Instant::now();
-    // Lines 4–16, in parallel over demonstrations; merged in dataset order (deterministic).
-    // Beside them, the sweeps they will grow are read from the file.
-    let (per_demo, read) = rayon::join(
+    let (robot, cfg) = (learner.robot.clone(), learner.config);
+    let ((arms, t_arms), ((shapes, grown), t_grown)) = rayon::join(
         || {
-            demos
-                .par_iter()
-                .map(|d| {
-                    let l = learner.lessons(d);
-                    progress(Progress::Done(1));
-                    l
-                })
-                .collect::<Result<Vec<Lessons>, LearnError>>()
-        },
-        || learner.read_ahead(demos),
-    );
-    let per_demo = per_demo?;
-    for l in &per_demo {
-        learner.add(l);
-    }
-    let lessons_timed = if read.is_empty() {
-        "segment + train skills"
-    } else {
-        "segment + train skills + sweeps read"
-    };
-    // Installed as the field builds would read them: in type order, those with new spheres.
-    for (t, sweep) in read {
-        if !learner.pending[t].is_empty() {
-            learner.install(t, sweep?)?;
-        }
-    }
-    let t_segment = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    let (knowledge, r) = rayon::join(
-        || {
-            learner.knowledge(&|p| {
-                if let Progress::Done(n) = p {
-                    progress(Progress::Done(n))
-                }
+            timed(|| {
+                demos
+                    .par_iter()
+                    .map(|d| {
+                        let arms = arm_lessons(&robot, d, &cfg);
+                        progress(Progress::Done(1));
+                        arms
+                    })
+                    .collect::<Vec<_>>()
             })
         },
-        || beside(&per_demo),
+        || timed(|| learner.grow(demos, progress)),
     );
-    let mut knowledge = knowledge?;
-    knowledge.timings = vec![
-        (lessons_timed, t_segment),
-        ("workspaces", t1.elapsed().as_secs_f64()),
-    ];
-    Ok((knowledge, per_demo, r))
+    let lessons = shapes
+        .into_iter()
+        .zip(arms)
+        .map(|(s, a)| joined(s, a))
+        .collect::<Result<Vec<Lessons>, LearnError>>()?;
+    grown?;
+    for l in &lessons {
+        learner.add_skills(l);
+    }
+    let mut knowledge = learner.assemble();
+    knowledge.timings = vec![("skills", t_arms), ("workspaces", t_grown)];
+    Ok((knowledge, lessons))
+}
+
+/// `f`'s result and its wall time, s.
+fn timed<R>(f: impl FnOnce() -> R) -> (R, f64) {
+    let t0 = Instant::now();
+    let r = f();
+    (r, t0.elapsed().as_secs_f64())
 }
 
 /// Learn (Alg. 3) one demonstration at a time: the state after the demonstrations added so
@@ -580,17 +606,64 @@ impl Learner {
     /// Alg. 3 lines 5–16 on demonstration `d` alone (segmentation, affordances, the swept
     /// spheres, TrainRDMP): what [`Learner::add`] merges. Independent of what was added.
     pub fn lessons(&self, d: &Demonstration) -> Result<Lessons, LearnError> {
-        Ok(Lessons {
-            demonstration: d.id.clone(),
-            fingerprint: fingerprint(d),
-            lessons: lessons(
-                &self.robot,
-                &self.location_kinds,
-                &self.part_kinds,
-                d,
-                &self.config,
-            )?,
-        })
+        let (shapes, arms) = rayon::join(
+            || self.shapes(d),
+            || arm_lessons(&self.robot, d, &self.config),
+        );
+        joined(shapes, arms)
+    }
+
+    /// [`shapes`] of `d` with this learner's types.
+    fn shapes(&self, d: &Demonstration) -> Result<Lessons, Failed> {
+        shapes(
+            &self.robot,
+            &self.location_kinds,
+            &self.part_kinds,
+            d,
+            &self.config,
+        )
+    }
+
+    /// The part of [`learn_lessons_into`] that does not wait for the skills: the [`shapes`]
+    /// of `demos` (in parallel; beside them, the stored sweeps they grow are read,
+    /// [`Learner::read_ahead`]), added in order if none failed, then the fields they touch
+    /// rebuilt. The shapes, and whether the sweeps were read and the fields rebuilt.
+    fn grow(
+        &mut self,
+        demos: &[Demonstration],
+        progress: OnProgress<'_>,
+    ) -> (Vec<Result<Lessons, Failed>>, Result<(), LearnError>) {
+        let (shapes, read) = rayon::join(
+            || demos.par_iter().map(|d| self.shapes(d)).collect::<Vec<_>>(),
+            || self.read_ahead(demos),
+        );
+        if shapes.iter().any(Result::is_err) {
+            return (shapes, Ok(()));
+        }
+        for l in shapes.iter().flatten() {
+            self.add_shapes(l);
+        }
+        let built = self.install_and_rebuild(read, progress);
+        (shapes, built)
+    }
+
+    /// The sweeps `read` ahead installed, as the field builds would read them (in type
+    /// order, those with new spheres), then the fields rebuilt ([`Learner::rebuild`]).
+    fn install_and_rebuild(
+        &mut self,
+        read: Vec<(usize, Result<Sweep, crate::kb::KbError>)>,
+        progress: OnProgress<'_>,
+    ) -> Result<(), LearnError> {
+        for (t, sweep) in read {
+            if !self.pending[t].is_empty() {
+                self.install(t, sweep?)?;
+            }
+        }
+        Ok(self.rebuild(&|p| {
+            if let Progress::Done(n) = p {
+                progress(Progress::Done(n))
+            }
+        })?)
     }
 
     /// The sweeps still in the file of the location types the lessons of `demos` will grow
@@ -619,6 +692,13 @@ impl Learner {
     /// Merges a demonstration's lessons (Alg. 3 lines 9, 13–16) and queues its swept spheres
     /// (line 11) for [`Learner::knowledge`].
     pub fn add(&mut self, lessons: &Lessons) {
+        self.add_shapes(lessons);
+        self.add_skills(lessons);
+    }
+
+    /// [`Learner::add`] but for the skills: the demonstration and its instances counted, its
+    /// affordances merged (line 9) and its swept spheres queued (line 11).
+    fn add_shapes(&mut self, lessons: &Lessons) {
         self.demonstrations += 1;
         self.ids
             .push((lessons.demonstration.clone(), lessons.fingerprint));
@@ -641,7 +721,13 @@ impl Learner {
                 self.location_types[t].instances += 1;
                 self.pending[t].push(spheres.clone());
             }
-            // Lines 13–16: the skill (a set: equal arm motions are stored once).
+        }
+    }
+
+    /// The rest of [`Learner::add`]: the skills of `lessons` (lines 13–16; a set, equal arm
+    /// motions stored once).
+    fn add_skills(&mut self, lessons: &Lessons) {
+        for l in &lessons.lessons {
             let rdmp = l.arm.as_ref().map(|(path, dt, rdmp)| {
                 skills::find_same(&self.arms, path, *dt).unwrap_or_else(|| {
                     self.arms.push(ArmSkill {
@@ -1005,6 +1091,13 @@ impl Learner {
     /// is told of each), the others kept. A touched type's sweep still in the file is read
     /// first, and may be refused ([`Learner::open`]).
     pub fn knowledge(&mut self, progress: OnProgress<'_>) -> Result<Knowledge, crate::kb::KbError> {
+        self.rebuild(progress)?;
+        Ok(self.assemble())
+    }
+
+    /// The first part of [`Learner::knowledge`]: the queued spheres added to their sweeps and
+    /// the fields of the types they touch rebuilt, one type per thread.
+    fn rebuild(&mut self, progress: OnProgress<'_>) -> Result<(), crate::kb::KbError> {
         for t in 0..self.sweeps.len() {
             if !self.pending[t].is_empty() {
                 self.read_sweep(t)?;
@@ -1035,10 +1128,15 @@ impl Learner {
         for (t, f) in rebuilt {
             self.location_types[t].field = f;
         }
+        Ok(())
+    }
+
+    /// The rest of [`Learner::knowledge`]: the knowledge as it stands, K after share().
+    fn assemble(&self) -> Knowledge {
         let mut skill_set = self.skills.clone();
         // Line 20: K ← share(K).
         skills::share(&mut skill_set);
-        Ok(Knowledge {
+        Knowledge {
             robot: self.robot.clone(),
             description: self.description.clone(),
             config: self.config,
@@ -1050,7 +1148,7 @@ impl Learner {
             instances: self.instances.clone(),
             demonstrations: self.demonstrations,
             timings: Vec::new(),
-        })
+        }
     }
 }
 
@@ -1142,4 +1240,55 @@ pub fn skills_per_class(k: &Knowledge) -> Vec<(&'static str, usize, usize)> {
             )
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Failed, LearnError, Lessons, joined};
+
+    fn failed(i: usize, what: &'static str) -> Failed {
+        let demonstration = "d000".to_string();
+        (
+            i,
+            LearnError::BadPose {
+                demonstration,
+                what,
+            },
+        )
+    }
+
+    fn what(r: Result<Lessons, LearnError>) -> &'static str {
+        match r {
+            Err(LearnError::BadPose { what, .. }) => what,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// A demonstration's first failure is the one learning its instances one by one meets:
+    /// the earlier instance's, and on one instance its shape's before its arm's.
+    #[test]
+    fn the_first_failure_by_instance_is_reported() {
+        let ok = || {
+            Ok(Lessons {
+                demonstration: "d000".into(),
+                fingerprint: 0,
+                lessons: Vec::new(),
+            })
+        };
+        assert_eq!(what(joined(Err(failed(1, "shape")), Ok(vec![]))), "shape");
+        assert_eq!(what(joined(ok(), Err(failed(1, "arm")))), "arm");
+        assert_eq!(
+            what(joined(Err(failed(2, "shape")), Err(failed(1, "arm")))),
+            "arm"
+        );
+        assert_eq!(
+            what(joined(Err(failed(1, "shape")), Err(failed(1, "arm")))),
+            "shape"
+        );
+        assert_eq!(
+            what(joined(Err(failed(0, "shape")), Err(failed(3, "arm")))),
+            "shape"
+        );
+        assert!(joined(ok(), Ok(vec![])).is_ok());
+    }
 }

@@ -5,8 +5,7 @@ use anyhow::Context;
 use prf_files::dataset::Dataset;
 use prf_files::robot;
 use prf_learn::learn::{
-    KbFile, Learner, fingerprint, learn_into, learn_lessons_into_with, lessons_part,
-    skills_per_class,
+    KbFile, Learner, fingerprint, learn_into, learn_lessons_into, skills_per_class,
 };
 use prf_learn::{LearnConfig, compile, report};
 use std::path::PathBuf;
@@ -170,24 +169,26 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
         }
     }
     let t1 = Instant::now();
-    // The lessons' part of the addition is encoded while the fields are rebuilt.
-    let (k, lessons, part) = learn_lessons_into_with(&mut learner, &demos, &|_| {}, lessons_part)
+    let (k, lessons) = learn_lessons_into(&mut learner, &demos, &|_| {})
         .with_context(|| format!("learning into {}", kb.display()))?;
     let t_learn = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let blob = compile(&k)?;
-    let t_compile = t2.elapsed().as_secs_f64();
-    let t3 = Instant::now();
-    // The addition is encoded while the blob is written and synced; the knowledge base is
-    // appended to only once the blob is written.
+    // The addition is encoded while the blob is compiled, written and synced; the knowledge
+    // base is appended to only once the blob is written.
     let (written, record) = rayon::join(
-        || prf_files::atomic::write(&a.output, &blob),
-        || learner.addition_with(&lessons, part),
+        || -> anyhow::Result<(Vec<u8>, f64)> {
+            let blob = compile(&k)?;
+            let t_compile = t2.elapsed().as_secs_f64();
+            prf_files::atomic::write(&a.output, &blob)
+                .with_context(|| format!("writing {}", a.output.display()))?;
+            Ok((blob, t_compile))
+        },
+        || learner.addition(&lessons),
     );
-    written.with_context(|| format!("writing {}", a.output.display()))?;
+    let (blob, t_compile) = written?;
     let kb_write = write_kb(kb, bytes, &mut learner, &record)
         .with_context(|| format!("writing {}", kb.display()))?;
-    let t_write = t3.elapsed().as_secs_f64();
+    let t_write = t2.elapsed().as_secs_f64() - t_compile;
     if !a.quiet {
         println!(
             "added {} demonstration(s) to {} ({before} → {}): {}",

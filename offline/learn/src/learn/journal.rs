@@ -4,18 +4,11 @@
 
 use super::{Learner, Lesson, Lessons, within_100_m};
 use crate::kb::{
-    AdditionRecord, AdditionState, ArmState, FRAMES, KbError, LessonState, LessonsPart,
-    LessonsState, PathSpheres, RdmpState, Rebuilt, encode_addition, encode_lessons, pose_of,
-    pose_state,
+    AdditionRecord, AdditionState, ArmState, FRAMES, KbError, LessonState, LessonsState,
+    PathSpheres, RdmpState, Rebuilt, encode_addition, encode_lessons, pose_of, pose_state,
 };
 use crate::workspace::PathSphere;
 use prf_shared::motion::CLASSES;
-
-/// The lessons' part of the addition record of `lessons` ([`Learner::addition_with`]). It
-/// depends on nothing else, so `prf learn --add` encodes it while the fields are rebuilt.
-pub fn lessons_part(lessons: &[Lessons]) -> LessonsPart {
-    encode_lessons(&lessons.iter().map(lessons_state).collect::<Vec<_>>())
-}
 
 impl Learner {
     /// The addition record of `lessons`, each already [`Learner::add`]ed, to append to the
@@ -24,12 +17,7 @@ impl Learner {
     /// emptied, the field and splat of that build; a type still queued is rebuilt after
     /// loading, as it would be here.
     pub fn addition(&self, lessons: &[Lessons]) -> AdditionRecord {
-        self.addition_with(lessons, lessons_part(lessons))
-    }
-
-    /// [`Learner::addition`] with the lessons' part encoded already ([`lessons_part`] of the
-    /// same `lessons`).
-    pub fn addition_with(&self, lessons: &[Lessons], part: LessonsPart) -> AdditionRecord {
+        let part = encode_lessons(&lessons.iter().map(lessons_state).collect::<Vec<_>>());
         let mut touched: Vec<usize> = lessons.iter().flat_map(Lessons::swept_types).collect();
         touched.sort_unstable();
         touched.dedup();
