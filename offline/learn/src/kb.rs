@@ -136,7 +136,7 @@ pub(crate) type Rebuilt = (
 /// touched: its unused pages cost nothing).
 fn lessons_bound(lessons: &[LessonsState]) -> usize {
     let long = lessons.iter().flat_map(|l| &l.lessons).map(|l| {
-        let sweep = l.sweep.as_ref().map_or(0, |p| p.0.spheres.len());
+        let sweep = l.sweep.as_ref().map_or(0, |p| p.0.len());
         let arm = l.arm.as_ref().map_or(0, |a| {
             (a.path.len() * 7 + a.rdmp.weights.len()) * size_of::<f64>()
         });
@@ -189,15 +189,16 @@ pub(crate) struct PathSpheres(pub std::sync::Arc<crate::workspace::SweptPath>);
 
 impl Serialize for PathSpheres {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        records::serialize(&self.0.spheres, s)
+        self.0.records().serialize(s)
     }
 }
 
 impl<'de> Deserialize<'de> for PathSpheres {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let spheres = records::deserialize(d)?;
+        let read = RecordBytes::<crate::workspace::PathSphere>::deserialize(d)?;
+        let spheres = RecordBytes::new(std::borrow::Cow::Owned(read.0.into_owned()));
         Ok(PathSpheres(std::sync::Arc::new(
-            crate::workspace::SweptPath::new(spheres),
+            crate::workspace::SweptPath::of_records(spheres),
         )))
     }
 }
@@ -960,13 +961,13 @@ mod tests {
                 centre: Vector3::new(i as f64 * 1e-3, -0.5, 1.0 / (1.0 + i as f64)),
                 sphere: (i % 7) as u8,
             })
-            .collect();
+            .collect::<Vec<_>>();
         let lesson = LessonState {
             class: "reach".into(),
             location_type: Some(1),
             part_type: 0,
             affordance: Some((2, [0.1, 0.2, 0.3, 1.0, 0.0, 0.0, 0.0])),
-            sweep: Some(PathSpheres(std::sync::Arc::new(SweptPath::new(spheres)))),
+            sweep: Some(PathSpheres(std::sync::Arc::new(SweptPath::new(&spheres)))),
             arm: None,
         };
         let state = AdditionState {

@@ -864,12 +864,7 @@ impl Learner {
                 .iter()
                 .map(|per| {
                     per.iter()
-                        .map(|path| {
-                            path.spheres
-                                .iter()
-                                .map(|s| (v(&s.centre), s.sphere))
-                                .collect()
-                        })
+                        .map(|path| path.spheres().map(|s| (v(&s.centre), s.sphere)).collect())
                         .collect()
                 })
                 .collect(),
@@ -1047,12 +1042,13 @@ impl Learner {
                     per.into_iter()
                         .map(|path| {
                             Arc::new(SweptPath::new(
-                                path.into_iter()
+                                &path
+                                    .into_iter()
                                     .map(|(c, sphere)| PathSphere {
                                         centre: v(c),
                                         sphere,
                                     })
-                                    .collect(),
+                                    .collect::<Vec<_>>(),
                             ))
                         })
                         .collect()
@@ -1075,7 +1071,7 @@ impl Learner {
         };
         let more = queued
             .iter()
-            .flat_map(|p| &p.spheres)
+            .flat_map(|p| p.spheres())
             .map(|p| (p.centre, self.robot.spheres[p.sphere as usize].radius));
         let nodes = sweep.grid_nodes(more, &self.config.workspace);
         if nodes > MAX_GRID_NODES {

@@ -20,6 +20,7 @@
 use crate::certify::{self, Certified};
 use crate::edt;
 use crate::in_file::{Seen, Spheres, ordinal_of};
+use crate::kb::{Record, RecordBytes};
 use crate::learn::KbFile;
 use nalgebra::Vector3;
 use prf_shared::JointVector;
@@ -253,7 +254,7 @@ impl Sweep {
         let (mut starts, mut start) = (Vec::with_capacity(paths.len()), 0);
         for p in paths {
             starts.push(start);
-            start += p.spheres.len() as u32;
+            start += p.len() as u32;
         }
         // The keys below the sweep's middle one and the others, each half on a core.
         let mut fresh = match self.seen.middle() {
@@ -276,7 +277,7 @@ impl Sweep {
             while starts.get(p + 1).is_some_and(|s| *s <= i) {
                 p += 1;
             }
-            let s = &paths[p].spheres[(i - starts[p]) as usize];
+            let s = paths[p].sphere((i - starts[p]) as usize);
             let radius = model.spheres[s.sphere as usize].radius;
             spheres.push(SphereSample {
                 centre: s.centre,
@@ -336,7 +337,9 @@ struct Fresh {
 /// done once with the demonstration's lessons rather than at each [`Sweep::add_spheres`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweptPath {
-    pub spheres: Vec<PathSphere>,
+    /// The spheres in order, as the knowledge base's records: an addition writes them as
+    /// they are, without a copy in between.
+    spheres: RecordBytes<'static, PathSphere>,
     keys: Vec<(SeenKey, u32)>,
 }
 
@@ -354,7 +357,7 @@ impl SweptPath {
             chain.kinematics(model, q).sphere_centres(model, &mut c);
             c
         };
-        let mut spheres = Vec::with_capacity(arm.len() * n);
+        let mut spheres = Vec::with_capacity(arm.len() * n * PathSphere::SIZE);
         let mut keys = Vec::with_capacity(arm.len() * n);
         let mut last = LastKeys::default();
         let mut put = |c: &[Vector3<f64>]| {
@@ -365,8 +368,10 @@ impl SweptPath {
                 };
                 let key = seen_key(&s);
                 if last.moved(&s, key) {
-                    keys.push((key, spheres.len() as u32));
-                    spheres.push(s);
+                    keys.push((key, (spheres.len() / PathSphere::SIZE) as u32));
+                    let mut record = [0; PathSphere::SIZE];
+                    s.put(&mut record);
+                    spheres.extend_from_slice(&record);
                 }
             }
         };
@@ -393,22 +398,56 @@ impl SweptPath {
             prev = Some((q, c1));
         }
         sort_unique(&mut keys);
-        SweptPath { spheres, keys }
+        SweptPath {
+            spheres: RecordBytes::new(spheres.into()),
+            keys,
+        }
     }
 
     /// The path of `spheres` as stored ([`SweptPath::of`]'s, or from before it left out
     /// repeated spheres: those are left out of the keys here).
-    pub fn new(spheres: Vec<PathSphere>) -> Self {
+    pub fn new(spheres: &[PathSphere]) -> Self {
+        Self::of_records(RecordBytes::written(&[], spheres))
+    }
+
+    /// [`SweptPath::new`] of the spheres as the knowledge base's records.
+    pub(crate) fn of_records(spheres: RecordBytes<'static, PathSphere>) -> Self {
         let mut last = LastKeys::default();
         let mut keys: Vec<(SeenKey, u32)> = Vec::with_capacity(spheres.len());
-        for (i, s) in spheres.iter().enumerate() {
-            let key = seen_key(s);
-            if last.moved(s, key) {
+        for i in 0..spheres.len() {
+            let s = spheres.get(i);
+            let key = seen_key(&s);
+            if last.moved(&s, key) {
                 keys.push((key, i as u32));
             }
         }
         sort_unique(&mut keys);
         SweptPath { spheres, keys }
+    }
+
+    /// Number of spheres.
+    pub fn len(&self) -> usize {
+        self.spheres.len()
+    }
+
+    /// Whether the path holds no sphere.
+    pub fn is_empty(&self) -> bool {
+        self.spheres.len() == 0
+    }
+
+    /// Sphere `i` (< [`SweptPath::len`]).
+    pub fn sphere(&self, i: usize) -> PathSphere {
+        self.spheres.get(i)
+    }
+
+    /// The spheres in order.
+    pub fn spheres(&self) -> impl Iterator<Item = PathSphere> + '_ {
+        (0..self.len()).map(|i| self.sphere(i))
+    }
+
+    /// The spheres as the knowledge base's records.
+    pub(crate) fn records(&self) -> &RecordBytes<'static, PathSphere> {
+        &self.spheres
     }
 }
 
@@ -1002,12 +1041,17 @@ mod tests {
                         );
                         spheres.push(PathSphere { centre, sphere });
                     }
-                    SweptPath::new(spheres)
+                    SweptPath::new(&spheres)
                 })
                 .collect();
             sorted.add_spheres(&model, &paths.iter().collect::<Vec<_>>());
             for p in &paths {
-                one_by_one(&model, &mut reference, &mut seen, &p.spheres);
+                one_by_one(
+                    &model,
+                    &mut reference,
+                    &mut seen,
+                    &p.spheres().collect::<Vec<_>>(),
+                );
             }
             assert_eq!(sorted.spheres, reference.spheres, "batch {batch}");
             assert_eq!(sorted.features, reference.features, "batch {batch}");
@@ -1090,15 +1134,16 @@ mod tests {
         // A step wider than any move: one configuration per sample, as `every` has.
         let path = SweptPath::of(&model, &base, &arm, 10.0);
         assert!(
-            path.spheres.len() < every.len() * 3 / 4,
+            path.len() < every.len() * 3 / 4,
             "{} of {}",
-            path.spheres.len(),
+            path.len(),
             every.len()
         );
         let (mut left_out, mut all) = (Sweep::default(), Sweep::default());
-        one_by_one(&model, &mut left_out, &mut HashSet::new(), &path.spheres);
+        let spheres: Vec<PathSphere> = path.spheres().collect();
+        one_by_one(&model, &mut left_out, &mut HashSet::new(), &spheres);
         one_by_one(&model, &mut all, &mut HashSet::new(), &every);
         assert_eq!(left_out.spheres, all.spheres);
-        assert_eq!(path, SweptPath::new(path.spheres.clone()));
+        assert_eq!(path, SweptPath::new(&spheres));
     }
 }

@@ -90,9 +90,8 @@ impl Learner {
                 Some(PathSpheres(path)) => {
                     let c = |s: &PathSphere| [s.centre.x, s.centre.y, s.centre.z];
                     if !path
-                        .spheres
-                        .iter()
-                        .all(|s| within_100_m(&c(s)) && (s.sphere as usize) < n_spheres)
+                        .spheres()
+                        .all(|s| within_100_m(&c(&s)) && (s.sphere as usize) < n_spheres)
                     {
                         return Err(bad("a swept sphere"));
                     }
