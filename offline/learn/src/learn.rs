@@ -732,7 +732,7 @@ impl Learner {
                 skills::find_same(&self.arms, path, *dt).unwrap_or_else(|| {
                     self.arms.push(ArmSkill {
                         rdmp: *rdmp,
-                        path: path.clone(),
+                        path: Arc::new(path.clone()),
                         dt: *dt,
                     });
                     self.arms.len() - 1
@@ -873,7 +873,7 @@ impl Learner {
                 .iter()
                 .map(|a| ArmState {
                     rdmp: RdmpState::of(&a.rdmp),
-                    path: a.path.clone(),
+                    path: a.path.to_vec(),
                     dt: a.dt,
                 })
                 .collect(),
@@ -990,7 +990,7 @@ impl Learner {
                     .rdmp
                     .rdmp()
                     .ok_or_else(|| KbError::Decode("an RDMP's weights are cut short".into()))?,
-                path: a.path,
+                path: Arc::new(a.path),
                 dt: a.dt,
             });
         }
