@@ -58,6 +58,15 @@ impl JacobianQr {
     /// [`JacobianQr::new`] of J given as Jᵀ (what the RDMP step's kinematics give), the
     /// same bits.
     pub fn of_transpose(jt: &JacobianT) -> Self {
+        Self::of_transpose_beside(jt, |_| {})
+    }
+
+    /// [`JacobianQr::of_transpose`], calling `beside(k)` after Householder step k (0..6):
+    /// work independent of J placed there runs while the next steps wait on their square
+    /// root and division (the RDMP step's DMPs, [`crate::rdmp::RdmpRun::step`]). The same
+    /// bits.
+    #[inline(always)]
+    pub fn of_transpose_beside(jt: &JacobianT, mut beside: impl FnMut(usize)) -> Self {
         // a = Jᵀ's columns: a[c][row] is Jᵀ(row, c).
         let mut a = jt.data.0;
         let mut qr = JacobianQr {
@@ -67,11 +76,17 @@ impl JacobianQr {
             det_q: 1.0,
         };
         reflect::<0>(&mut a, &mut qr);
+        beside(0);
         reflect::<1>(&mut a, &mut qr);
+        beside(1);
         reflect::<2>(&mut a, &mut qr);
+        beside(2);
         reflect::<3>(&mut a, &mut qr);
+        beside(3);
         reflect::<4>(&mut a, &mut qr);
+        beside(4);
         reflect::<5>(&mut a, &mut qr);
+        beside(5);
         qr
     }
 
