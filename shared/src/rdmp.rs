@@ -531,7 +531,7 @@ impl RdmpRun {
     /// [`RdmpRun::advance`] runs part i after Householder step i of the QR, whose chain (six
     /// square roots and divisions, each waiting on the step before) leaves the processor room
     /// for them. (The order before, the three DMPs before the QR and the features after it,
-    /// was about 8 % slower: `prf bench --profile-steps`.)
+    /// was 8–9 % slower on an AMD EPYC VM: `prf bench --profile-steps`.)
     #[inline(always)]
     fn dmp_part(&mut self, part: usize, rdmp: &Rdmp, cfg: &RdmpConfig, out: &mut DmpVelocities) {
         let (phase, ahead) = (&self.phase, &mut self.ahead);
