@@ -28,8 +28,8 @@ pub const MAX_PLANNING_INSTRUCTIONS: u64 = 300_000_000;
 pub const MAX_STATIC_RAM: u64 = 128 * 1024;
 /// Firmware and host setpoints agree within this, rad (arm) and m / rad (platform goal): 0,
 /// bit for bit — both run the same Rust code, and every transcendental function in the
-/// stream's path is computed by the same code on both: the `libm` crate's (FK's `sincos`,
-/// atan2), or `prf_shared`'s own (`float::exp_neg`, the SO(3) series).
+/// stream's path is computed by the same code on both: the `libm` crate's (atan2), or
+/// `prf_shared`'s own (FK's `float::sincos`, `float::exp_neg`, the SO(3) series).
 pub const STREAM_TOLERANCE: f64 = 0.0;
 /// Ticks the host reference runs at most (an hour at 1 kHz).
 const MAX_TICKS: usize = 3_600_000;

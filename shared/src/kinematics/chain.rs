@@ -122,50 +122,76 @@ pub struct Chain {
     about_z: [bool; NA],
     flange: (Turn, Shift),
     tcp: (Turn, Shift),
+    /// The joints' turns, shifts and axes are the iiwa's ([`IIWA`]): FK takes them as
+    /// constants, so a turn's columns are picked in registers, not by an index read from
+    /// memory.
+    iiwa: bool,
 }
+
+/// How the KUKA iiwa's URDF turns and shifts at its seven joints (every joint about z):
+/// the pattern [`Chain::new`] reads from [`RobotModel::kmr_iiwa14`] (test
+/// `the_iiwa_pattern_is_the_kmr_iiwa14s`).
+const IIWA: [(Turn, Shift); NA] = {
+    const fn turn(s0: i8, s2: i8) -> Turn {
+        Turn::Columns {
+            index: [0, 2, 1],
+            sign: [s0, 1, s2],
+        }
+    }
+    [
+        (Turn::Identity, Shift::Along(2)),
+        (turn(-1, 1), Shift::Along(2)),
+        (turn(-1, 1), Shift::Along(1)),
+        (turn(1, -1), Shift::Along(2)),
+        (turn(-1, 1), Shift::Along(1)),
+        (turn(1, -1), Shift::Along(2)),
+        (turn(-1, 1), Shift::Along(1)),
+    ]
+};
 
 impl Chain {
     /// The chain of `model`.
     pub fn new(model: &RobotModel) -> Chain {
+        let origins = core::array::from_fn(|i| Turn::of(&model.joints[i].origin.rotation));
+        let shifts =
+            core::array::from_fn(|i| Shift::of(&model.joints[i].origin.translation.vector));
+        let about_z = core::array::from_fn(|i| super::is_z(&model.joints[i].axis));
+        let iiwa = about_z == [true; NA] && (0..NA).all(|i| (origins[i], shifts[i]) == IIWA[i]);
         Chain {
-            origins: core::array::from_fn(|i| Turn::of(&model.joints[i].origin.rotation)),
-            shifts: core::array::from_fn(|i| Shift::of(&model.joints[i].origin.translation.vector)),
-            about_z: core::array::from_fn(|i| super::is_z(&model.joints[i].axis)),
+            origins,
+            shifts,
+            about_z,
             flange: fixed_of(&model.flange),
             tcp: fixed_of(&model.tcp),
+            iiwa,
         }
     }
 
-    /// Frame i + 1 from frame i: T_{i+1} = T_i · origin_i · Rot(axis_i, q_i), with sin and cos
-    /// from one `libm::sincos` (the same bits on the host and on the controller).
+    /// Frame i + 1 from frame i: T_{i+1} = T_i · origin_i · Rot(axis_i, q_i), given
+    /// (sin q_i, cos q_i) as `sc` ([`crate::float::sincos`]: the same bits on the host and on
+    /// the controller).
     #[inline(always)]
-    pub(super) fn joint(&self, model: &RobotModel, i: usize, f: &Frame, q: f64) -> Frame {
-        let joint = &model.joints[i];
-        let origin = self.shifts[i].after(f, &joint.origin.translation.vector);
-        let (s, c) = libm::sincos(q);
-        let rotation = match (&self.origins[i], self.about_z[i]) {
-            // [σ0 r_i0, σ1 r_i1, σ2 r_i2] · Rot(z, q), the signs σ moved onto c and s (exact,
-            // as σ = ±1): the third column stays.
-            (Turn::Columns { index, sign }, true) => {
-                let r = |j: usize| f.rotation.column(index[j] as usize);
-                let (s0, s1) = (f64::from(sign[0]), f64::from(sign[1]));
-                let (r0, r1) = (r(0), r(1));
-                Matrix3::from_columns(&[
-                    r0 * (c * s0) + r1 * (s * s1),
-                    r1 * (c * s1) - r0 * (s * s0),
-                    r(2) * f64::from(sign[2]),
-                ])
-            }
-            (turn, true) => {
-                let [a0, a1, a2] = turn.after(&f.rotation, &joint.origin.rotation);
-                Matrix3::from_columns(&[a0 * c + a1 * s, a1 * c - a0 * s, a2])
-            }
-            (turn, false) => {
-                let a = turn.after(&f.rotation, &joint.origin.rotation);
-                Matrix3::from_columns(&a) * rodrigues(&joint.axis, s, c)
-            }
-        };
-        Frame { rotation, origin }
+    pub(super) fn joint(&self, model: &RobotModel, i: usize, f: &Frame, sc: (f64, f64)) -> Frame {
+        let how = (self.origins[i], self.shifts[i], self.about_z[i]);
+        joint_as(how, model, i, f, sc)
+    }
+
+    /// [`Chain::joint`] of an iiwa chain ([`IIWA`]), joint `I`: the same bits, its turn and
+    /// shift constants.
+    #[inline(always)]
+    pub(super) fn iiwa_joint<const I: usize>(
+        model: &RobotModel,
+        f: &Frame,
+        sc: (f64, f64),
+    ) -> Frame {
+        let (turn, shift) = IIWA[I];
+        joint_as((turn, shift, true), model, I, f, sc)
+    }
+
+    /// True if FK may take this chain's joints as the iiwa's ([`Chain::iiwa_joint`]).
+    #[inline(always)]
+    pub(super) fn is_iiwa(&self) -> bool {
+        self.iiwa
     }
 
     /// The axis of joint i in the arm base frame, from frame i + 1 ([`super::joint_axis`]).
@@ -185,6 +211,43 @@ impl Chain {
     pub(super) fn tcp_frame(&self, model: &RobotModel, f: &Frame) -> Frame {
         fixed(&self.tcp, &model.tcp, f)
     }
+}
+
+/// Frame i + 1 from frame i as `how` (the origin's turn and shift, and whether the joint
+/// turns about z) gives it, the joint's angle given as its sine and cosine: [`Chain::joint`].
+#[inline(always)]
+fn joint_as(
+    (turn_of_origin, shift, about_z): (Turn, Shift, bool),
+    model: &RobotModel,
+    i: usize,
+    f: &Frame,
+    (s, c): (f64, f64),
+) -> Frame {
+    let joint = &model.joints[i];
+    let origin = shift.after(f, &joint.origin.translation.vector);
+    let rotation = match (&turn_of_origin, about_z) {
+        // [σ0 r_i0, σ1 r_i1, σ2 r_i2] · Rot(z, q), the signs σ moved onto c and s (exact,
+        // as σ = ±1): the third column stays.
+        (Turn::Columns { index, sign }, true) => {
+            let r = |j: usize| f.rotation.column(index[j] as usize);
+            let (s0, s1) = (f64::from(sign[0]), f64::from(sign[1]));
+            let (r0, r1) = (r(0), r(1));
+            Matrix3::from_columns(&[
+                r0 * (c * s0) + r1 * (s * s1),
+                r1 * (c * s1) - r0 * (s * s0),
+                r(2) * f64::from(sign[2]),
+            ])
+        }
+        (turn, true) => {
+            let [a0, a1, a2] = turn.after(&f.rotation, &joint.origin.rotation);
+            Matrix3::from_columns(&[a0 * c + a1 * s, a1 * c - a0 * s, a2])
+        }
+        (turn, false) => {
+            let a = turn.after(&f.rotation, &joint.origin.rotation);
+            Matrix3::from_columns(&a) * rodrigues(&joint.axis, s, c)
+        }
+    };
+    Frame { rotation, origin }
 }
 
 /// How FK applies the fixed transform `p`.
@@ -258,6 +321,41 @@ mod tests {
             Turn::of(&UnitQuaternion::from_euler_angles(0.3, 0.0, 0.0)),
             Turn::General
         );
+    }
+
+    /// [`IIWA`] is the pattern read from the iiwa's model, and FK through it gives the bits of
+    /// the general joint-by-joint chain at random configurations; a model off the pattern
+    /// (one origin turned otherwise) takes the general chain.
+    #[test]
+    fn the_iiwa_pattern_is_the_kmr_iiwa14s() {
+        let model = RobotModel::kmr_iiwa14();
+        let chain = Chain::new(&model);
+        assert!(chain.iiwa);
+        let general = Chain {
+            iiwa: false,
+            ..chain
+        };
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        for _ in 0..200 {
+            let q = crate::JointVector::from_fn(|_, _| {
+                seed = seed
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 6.0
+            });
+            let (tcp, jt) = chain.tcp_and_jacobian_t(&model, &q);
+            let (tcp_g, jt_g) = general.tcp_and_jacobian_t(&model, &q);
+            assert_eq!(
+                (tcp.rotation, tcp.origin, jt),
+                (tcp_g.rotation, tcp_g.origin, jt_g)
+            );
+            let (k, k_g) = (chain.kinematics(&model, &q), general.kinematics(&model, &q));
+            assert_eq!(k.frames, k_g.frames);
+        }
+        let mut other = model.clone();
+        other.joints[3].origin.rotation =
+            UnitQuaternion::from_euler_angles(-core::f64::consts::FRAC_PI_2, 0.0, 0.0);
+        assert!(!Chain::new(&other).iiwa);
     }
 
     /// The iiwa's translations (origins, flange, TCP) lie on one axis each; a translation off
