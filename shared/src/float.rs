@@ -131,14 +131,15 @@ const EXP_RANGE: f64 = 700.0;
 
 mod sincos_table;
 
-/// sin x and cos x within an ulp of 1 (2.2e-16, absolute) of the true values for
-/// |x| ≤ [`SINCOS_RANGE`] (test `sincos_is_within_an_ulp_of_one`), libm's `sincos` beyond
-/// (and for NaN). x = k/32 + d with k = round(32x), d exact (Sterbenz) and |d| ≤ 1/64; then
-/// sin x = s_k + (s_k (cos d − 1) + c_k sin d), cos x = c_k + (c_k (cos d − 1) − s_k sin d),
-/// s_k and c_k correctly rounded from a table of 257 pairs, sin d and cos d − 1 from their
-/// Taylor series to d⁷ and d⁶ (the next terms are below 1e-21). Only +, −, ×, a table read and
-/// bit moves, inlined: FK's seven joint angles per RDMP step without libm's argument
-/// reduction and its two polynomials of degree 13, which must serve every argument.
+/// sin x and cos x within an ulp of 1 (2.2e-16, absolute) of libm's for |x| ≤
+/// [`SINCOS_RANGE`] (1.1e-16 at most where tested: `sincos_is_within_an_ulp_of_one`), libm's
+/// `sincos` beyond (and for NaN). x = k/32 + d with k = round(32x), d exact (Sterbenz) and
+/// |d| ≤ 1/64; then sin x = s_k + (s_k (cos d − 1) + c_k sin d) and
+/// cos x = c_k + (c_k (cos d − 1) − s_k sin d), s_k and c_k correctly rounded from a table of
+/// 257 pairs, sin d and cos d − 1 from their Taylor series to d⁷ and d⁶ (the next terms are
+/// below 1e-19). Only +, −, ×, a table read and bit moves, inlined: FK's seven joint angles per
+/// RDMP step without libm's argument reduction and its two polynomials of degree 13, which
+/// must serve every argument.
 #[inline(always)]
 pub fn sincos(x: f64) -> (f64, f64) {
     if !(f64::abs(x) <= SINCOS_RANGE) {
@@ -268,7 +269,10 @@ mod tests {
             let x = (i as f64 - 128.0) / 32.0;
             let (s_ref, c_ref) = libm::sincos(x);
             for (v, r) in [(*s_k, s_ref), (*c_k, c_ref)] {
-                assert!(v == r || (v * r > 0.0 && ulps(v.abs(), r.abs()) <= 1), "{x}: {v} {r}");
+                assert!(
+                    v == r || (v * r > 0.0 && ulps(v.abs(), r.abs()) <= 1),
+                    "{x}: {v} {r}"
+                );
             }
         }
     }
