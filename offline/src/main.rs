@@ -67,7 +67,8 @@ enum Command {
     /// output stage) against firmware-sim over iceoryx2 shared memory.
     Run(run::Args),
     /// Host cell figures: setpoint latency through iceoryx2 against a Unix socket, the 1 kHz
-    /// loop's jitter and deadline misses against firmware-sim, Ruckig's per-update cost.
+    /// loop's jitter and deadline misses against firmware-sim (beside a probe thread's: the
+    /// machine's own stalls), Ruckig's per-update cost.
     BenchCell(bench::cell::Args),
     /// Run tasks on the cell-controller firmware (Cortex-M7 under QEMU mps2-an500, blob flashed
     /// into its region) and check each against the host: executor tick, planning and RAM

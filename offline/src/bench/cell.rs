@@ -3,9 +3,10 @@
 //! payload size, in the same run: 1 kHz sends, the peer asleep between messages (woken by an
 //! iceoryx2 event / by the socket) and, for iceoryx2, also a peer that polls. (2) The 1 kHz
 //! loop against firmware-sim for `--loop` seconds: wake-up lateness, deadline misses,
-//! latency. (3) Ruckig's per-update time and allocations in the output stage.
+//! latency, beside a probe of the machine's own stalls ([`crate::bench::stall_probe`]). (3) Ruckig's per-update time and allocations in the output stage.
 
 use crate::bench::alloc_count::allocations;
+use crate::bench::stall_probe::StallProbe;
 use crate::cli::args::{read_blob, runtime};
 use crate::cli::child::{ChildGuard, spawn_firmware};
 use anyhow::{Context, Result, anyhow, bail};
@@ -276,19 +277,39 @@ pub fn run(a: &Args) -> Result<()> {
     let mut rows = Vec::new();
     for (wait, realtime) in variants {
         (cell.cfg.wait, cell.cfg.realtime) = (wait, realtime);
-        rows.push(loop_figures(&mut cell, &rt, &program, &ft, a.loop_seconds)?);
+        let probe = StallProbe::start(realtime).context("starting the stall probe's thread")?;
+        let figures = loop_figures(&mut cell, &rt, &program, &ft, a.loop_seconds);
+        let p = probe.stop();
+        println!(
+            "  beside it, a probe thread ({}; an absolute clock_nanosleep each 1 ms, no work): {} wake-ups, late p50 {:.0} µs p99 {:.0} µs max {:.0} µs, {} a whole period late ({:.3} %)",
+            p.scheduling,
+            p.wakes,
+            p.late_p50,
+            p.late_p99,
+            p.late_max,
+            p.misses,
+            p.miss_percent()
+        );
+        rows.push((figures?, p));
     }
     cell.shutdown()?;
     println!(
-        "\n  {:<72} {:>8} {:>8} {:>9}",
-        "pacing (wake-up lateness, µs; medians over the runs)", "p50", "p99", "misses %"
+        "\n  {:<72} {:>8} {:>8} {:>9} {:>9}",
+        "pacing (wake-up lateness, µs; medians over the runs)", "p50", "p99", "misses %", "probe %"
     );
-    for r in &rows {
+    for (r, p) in &rows {
         println!(
-            "  {:<72} {:>8.1} {:>8.1} {:>9.3}",
-            r.pacing, r.late_p50, r.late_p99, r.miss_percent
+            "  {:<72} {:>8.1} {:>8.1} {:>9.3} {:>9.3}",
+            r.pacing,
+            r.late_p50,
+            r.late_p99,
+            r.miss_percent,
+            p.miss_percent()
         );
     }
+    println!(
+        "  probe %: the probe thread's wake-ups a whole period late, the misses the machine imposes on any thread so scheduled"
+    );
     Ok(())
 }
 

@@ -4,3 +4,4 @@
 pub mod alloc_count;
 pub mod cell;
 pub mod math;
+pub mod stall_probe;

@@ -17,8 +17,22 @@ pub struct RealTime {
 impl RealTime {
     /// Tries `SCHED_FIFO` at `priority` (1–99) and `mlockall`.
     pub fn enter(priority: i32) -> Self {
+        RealTime::enter_with(priority, true)
+    }
+
+    /// Tries `SCHED_FIFO` at `priority` only, leaving the memory as it is: for a thread
+    /// beside one that locks and unlocks the process's memory itself.
+    pub fn enter_scheduling(priority: i32) -> Self {
+        RealTime::enter_with(priority, false)
+    }
+
+    fn enter_with(priority: i32, lock: bool) -> Self {
         let (previous, fifo) = set_fifo(priority);
-        let locked = lock_memory();
+        let locked = if lock {
+            lock_memory()
+        } else {
+            Err("not asked".to_string())
+        };
         let status = format!(
             "{}, {}",
             match fifo {
