@@ -3,7 +3,8 @@
 //! payload size, in the same run: 1 kHz sends, the peer asleep between messages (woken by an
 //! iceoryx2 event / by the socket) and, for iceoryx2, also a peer that polls. (2) The 1 kHz
 //! loop against firmware-sim for `--loop` seconds: wake-up lateness, deadline misses,
-//! latency, beside a probe of the machine's own stalls ([`crate::bench::stall_probe`]). (3) Ruckig's per-update time and allocations in the output stage.
+//! latency, beside a probe of the machine's own stalls ([`crate::bench::stall_probe`]).
+//! (3) Ruckig's per-update time and allocations in the output stage.
 
 use crate::bench::alloc_count::allocations;
 use crate::bench::stall_probe::StallProbe;

@@ -47,9 +47,9 @@ pub struct StallProbe {
 
 impl StallProbe {
     /// Starts the probe thread, `SCHED_FIFO` at `priority` if given (and granted), sleeping
-    /// with the loop's absolute `clock_nanosleep` ([`sleep_until`], timer slack 1 ns, no spin: the
-    /// misses it counts are late by a whole period) but not through the embassy-time
-    /// driver, whose queue and lock it would share with the loop.
+    /// with the loop's absolute `clock_nanosleep` ([`sleep_until`], timer slack 1 ns, no
+    /// spin: the misses it counts are late by a whole period) but not through the
+    /// embassy-time driver, whose queue and lock it would share with the loop.
     pub fn start(priority: Option<i32>) -> std::io::Result<Self> {
         let stop = Arc::new(AtomicBool::new(false));
         let flag = stop.clone();
