@@ -489,21 +489,29 @@ pub fn learn_lessons_into(
         (demos.len() + learner.location_kinds.len()) as u64,
     ));
     let (robot, cfg) = (learner.robot.clone(), learner.config);
-    let ((arms, t_arms), ((shapes, grown), t_grown)) = rayon::join(
-        || {
-            timed(|| {
-                demos
-                    .par_iter()
-                    .map(|d| {
-                        let arms = arm_lessons(&robot, d, &cfg);
-                        progress(Progress::Done(1));
-                        arms
-                    })
-                    .collect::<Vec<_>>()
+    let mut skilled = (Vec::new(), 0.0);
+    let skills = || {
+        timed(|| {
+            demos
+                .par_iter()
+                .map(|d| {
+                    let arms = arm_lessons(&robot, d, &cfg);
+                    progress(Progress::Done(1));
+                    arms
+                })
+                .collect::<Vec<_>>()
+        })
+    };
+    // The skills are queued behind the stored sweeps' read: the other core reads them first,
+    // so the workspaces (which wait for the read) are not kept waiting by the skills.
+    let ((shapes, grown), t_grown) = rayon::scope(|s| {
+        timed(|| {
+            learner.grow(demos, progress, || {
+                s.spawn(|_| skilled = skills());
             })
-        },
-        || timed(|| learner.grow(demos, progress)),
-    );
+        })
+    });
+    let (arms, t_arms) = skilled;
     let lessons = shapes
         .into_iter()
         .zip(arms)
@@ -628,13 +636,21 @@ impl Learner {
     /// of `demos` (in parallel; beside them, the stored sweeps they grow are read,
     /// [`Learner::read_ahead`]), added in order if none failed, then the fields they touch
     /// rebuilt. The shapes, and whether the sweeps were read and the fields rebuilt.
+    ///
+    /// `queue` is called once, after the read is queued and before the shapes are learned:
+    /// work it queues on this thread is taken up by an idle core after the read (a rayon
+    /// thief takes the oldest job first).
     fn grow(
         &mut self,
         demos: &[Demonstration],
         progress: OnProgress<'_>,
+        queue: impl FnOnce() + Send,
     ) -> (Vec<Result<Lessons, Failed>>, Result<(), LearnError>) {
         let (shapes, read) = rayon::join(
-            || demos.par_iter().map(|d| self.shapes(d)).collect::<Vec<_>>(),
+            || {
+                queue();
+                demos.par_iter().map(|d| self.shapes(d)).collect::<Vec<_>>()
+            },
             || self.read_ahead(demos),
         );
         if shapes.iter().any(Result::is_err) {
