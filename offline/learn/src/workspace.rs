@@ -32,6 +32,7 @@ use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
 use rustc_hash::FxHashSet;
 use std::collections::HashSet;
+use std::ops::Range;
 
 /// Settings of workspace learning.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -299,11 +300,9 @@ impl Sweep {
         to: Option<SeenKey>,
     ) -> Vec<(SeenKey, u32)> {
         let runs = paths.iter().zip(starts).map(|(p, &start)| {
-            let at = |bound: Option<SeenKey>, or: usize| {
-                bound.map_or(or, |b| p.keys.partition_point(|e| e.0 < b))
-            };
+            let at = |bound: Option<SeenKey>, or: usize| bound.map_or(or, |b| p.keys.below(b));
             Run {
-                keys: p.keys[at(from, 0)..at(to, p.keys.len())].into(),
+                keys: p.keys.run(at(from, 0)..at(to, p.keys.len())),
                 start,
             }
         });
@@ -340,7 +339,7 @@ pub struct SweptPath {
     /// The spheres in order, as the knowledge base's records: an addition writes them as
     /// they are, without a copy in between.
     spheres: RecordBytes<'static, PathSphere>,
-    keys: Vec<(SeenKey, u32)>,
+    keys: PathKeys,
 }
 
 impl SweptPath {
@@ -358,7 +357,7 @@ impl SweptPath {
             c
         };
         let mut spheres = Vec::with_capacity(arm.len() * n * PathSphere::SIZE);
-        let mut keys = Vec::with_capacity(arm.len() * n);
+        let mut keys = RawKeys::with_capacity(arm.len() * n);
         let mut last = LastKeys::default();
         let mut put = |c: &[Vector3<f64>]| {
             for (j, c) in c.iter().enumerate() {
@@ -368,7 +367,7 @@ impl SweptPath {
                 };
                 let key = seen_key(&s);
                 if last.moved(&s, key) {
-                    keys.push((key, (spheres.len() / PathSphere::SIZE) as u32));
+                    keys.push(key);
                     let mut record = [0; PathSphere::SIZE];
                     s.put(&mut record);
                     spheres.extend_from_slice(&record);
@@ -397,10 +396,10 @@ impl SweptPath {
             }
             prev = Some((q, c1));
         }
-        sort_unique(&mut keys);
+        let spheres = RecordBytes::new(spheres.into());
         SweptPath {
-            spheres: RecordBytes::new(spheres.into()),
-            keys,
+            keys: keys.sorted(&spheres),
+            spheres,
         }
     }
 
@@ -421,8 +420,10 @@ impl SweptPath {
                 keys.push((key, i as u32));
             }
         }
-        sort_unique(&mut keys);
-        SweptPath { spheres, keys }
+        SweptPath {
+            spheres,
+            keys: PathKeys::of(keys),
+        }
     }
 
     /// Number of spheres.
@@ -454,8 +455,25 @@ impl SweptPath {
 /// A run of sorted keys: ascending, without repeats, each key with the index of its
 /// sphere, the indices offset by `start` (distinct across the runs merged together).
 struct Run<'a> {
-    keys: std::borrow::Cow<'a, [(SeenKey, u32)]>,
+    keys: RunKeys<'a>,
     start: u32,
+}
+
+/// The keys of a [`Run`]: a path's packed ones ([`PathKeys`]), or pairs.
+enum RunKeys<'a> {
+    Packed(&'a Packing, &'a [u64]),
+    Pairs(std::borrow::Cow<'a, [(SeenKey, u32)]>),
+}
+
+impl RunKeys<'_> {
+    /// Entry `i`, if there is one.
+    #[inline]
+    fn get(&self, i: usize) -> Option<(SeenKey, u32)> {
+        match self {
+            RunKeys::Packed(p, words) => words.get(i).map(|w| p.unpack(*w)),
+            RunKeys::Pairs(keys) => keys.get(i).copied(),
+        }
+    }
 }
 
 /// The runs merged into one, keeping of equal keys the entry of least index: what merging by
@@ -468,7 +486,7 @@ fn merged(mut runs: Vec<Run<'_>>) -> MergeTwo<'_> {
         while let Some(a) = pairs.next() {
             next.push(match pairs.next() {
                 Some(b) => Run {
-                    keys: MergeTwo::new(a, b).collect::<Vec<_>>().into(),
+                    keys: RunKeys::Pairs(MergeTwo::new(a, b).collect::<Vec<_>>().into()),
                     start: 0,
                 },
                 None => a,
@@ -478,7 +496,7 @@ fn merged(mut runs: Vec<Run<'_>>) -> MergeTwo<'_> {
     }
     let mut runs = runs.into_iter();
     let empty = || Run {
-        keys: (&[][..]).into(),
+        keys: RunKeys::Pairs((&[][..]).into()),
         start: 0,
     };
     MergeTwo::new(
@@ -509,8 +527,8 @@ impl Iterator for MergeTwo<'_> {
 
     fn next(&mut self) -> Option<(SeenKey, u32)> {
         let (a, b) = (self.a.keys.get(self.i), self.b.keys.get(self.j));
-        let x = a.map(|&(k, i)| (k, i + self.a.start));
-        let y = b.map(|&(k, i)| (k, i + self.b.start));
+        let x = a.map(|(k, i)| (k, i + self.a.start));
+        let y = b.map(|(k, i)| (k, i + self.b.start));
         match (x, y) {
             (Some(x), Some(y)) => {
                 let (kx, ky) = (ordinal_of(&x.0), ordinal_of(&y.0));
@@ -548,27 +566,155 @@ impl LastKeys {
     }
 }
 
-/// Sorts a path's keys (each with the index of its sphere, ascending) by key and keeps the
-/// earliest of equal ones. Where the path's extent allows ([`Packing`]), key and index are
-/// sorted as one `u64`: for d063's two arm lessons 26.4 M instructions with the packing,
-/// against 43.2 M sorting the tuples (`valgrind --tool=callgrind` of `prf learn --add`).
-fn sort_unique(keys: &mut Vec<(SeenKey, u32)>) {
-    let Some(p) = Packing::of(keys) else {
-        keys.sort_unstable();
-        keys.dedup_by_key(|e| e.0);
-        return;
-    };
-    let mut packed: Vec<u64> = keys.iter().map(|e| p.pack(e)).collect();
-    packed.sort_unstable();
-    packed.dedup_by_key(|w| p.key_of(*w));
-    keys.clear();
-    keys.extend(packed.into_iter().map(|w| p.unpack(w)));
+/// A path's keys, sorted, each once with the index of its earliest sphere. Where the path's
+/// extent allows ([`Packing`]), key and index are kept and sorted as one `u64`: for d063's two
+/// arm lessons 26.4 M instructions with the packing, against 43.2 M sorting the pairs
+/// (`valgrind --tool=callgrind` of `prf learn --add`), and 8 bytes a key where a pair takes 20.
+#[derive(Clone, Debug, PartialEq)]
+enum PathKeys {
+    Packed(Packing, Vec<u64>),
+    Pairs(Vec<(SeenKey, u32)>),
+}
+
+impl PathKeys {
+    /// `keys` (each with the index of its sphere) sorted by key, the earliest of equal keys
+    /// kept.
+    fn of(mut keys: Vec<(SeenKey, u32)>) -> Self {
+        match Packing::of(&keys) {
+            Some(p) => {
+                let words = keys.iter().map(|e| p.pack(e)).collect();
+                PathKeys::packed(p, words)
+            }
+            None => {
+                keys.sort_unstable();
+                keys.dedup_by_key(|e| e.0);
+                PathKeys::Pairs(keys)
+            }
+        }
+    }
+
+    /// `words`, packed by `p`, sorted and de-duplicated by key.
+    fn packed(p: Packing, mut words: Vec<u64>) -> Self {
+        words.sort_unstable();
+        words.dedup_by_key(|w| p.key_of(*w));
+        PathKeys::Packed(p, words)
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            PathKeys::Packed(_, words) => words.len(),
+            PathKeys::Pairs(keys) => keys.len(),
+        }
+    }
+
+    /// The number of keys below `bound`.
+    fn below(&self, bound: SeenKey) -> usize {
+        match self {
+            PathKeys::Packed(p, words) => words.partition_point(|w| p.unpack(*w).0 < bound),
+            PathKeys::Pairs(keys) => keys.partition_point(|e| e.0 < bound),
+        }
+    }
+
+    /// The keys in `range` as a run.
+    fn run(&self, range: Range<usize>) -> RunKeys<'_> {
+        match self {
+            PathKeys::Packed(p, words) => RunKeys::Packed(p, &words[range]),
+            PathKeys::Pairs(keys) => RunKeys::Pairs(keys[range].into()),
+        }
+    }
+
+    /// The keys with their indices, in order.
+    #[cfg(test)]
+    fn to_vec(&self) -> Vec<(SeenKey, u32)> {
+        let run = self.run(0..self.len());
+        (0..self.len()).filter_map(|i| run.get(i)).collect()
+    }
+}
+
+/// Bits of each coordinate's offset in a [`RawKeys`] word: ±26 m from the first key.
+const RAW_BITS: u32 = 18;
+
+/// A path's keys as [`SweptPath::of`] finds them, one per sphere kept, in order (the index is
+/// the position): each in a `u64`, its coordinates as offsets from the first key's (in
+/// [`RAW_BITS`] bits, offset by half their range) above its robot sphere; with their extent,
+/// for the [`Packing`] they are sorted in. 8 bytes a key, where the pairs took 20 (a path's
+/// keys were a third of the page faults of `prf learn --add`).
+struct RawKeys {
+    first: Option<[i32; 3]>,
+    words: Vec<u64>,
+    least: [i32; 3],
+    most: [i32; 3],
+    sphere: u8,
+    /// A key too far from the first for its word: the keys are taken from the spheres.
+    wide: bool,
+}
+
+impl RawKeys {
+    fn with_capacity(n: usize) -> Self {
+        RawKeys {
+            first: None,
+            words: Vec::with_capacity(n),
+            least: [i32::MAX; 3],
+            most: [i32::MIN; 3],
+            sphere: 0,
+            wide: false,
+        }
+    }
+
+    /// Adds the key of the next sphere kept.
+    #[inline]
+    fn push(&mut self, (x, y, z, sphere): SeenKey) {
+        let first = *self.first.get_or_insert([x, y, z]);
+        let mut word = 0;
+        for (c, v) in [x, y, z].into_iter().enumerate() {
+            self.least[c] = self.least[c].min(v);
+            self.most[c] = self.most[c].max(v);
+            let offset = i64::from(v) - i64::from(first[c]) + (1 << (RAW_BITS - 1));
+            self.wide |= !(0..1 << RAW_BITS).contains(&offset);
+            word = word << RAW_BITS | (offset as u64 & ((1 << RAW_BITS) - 1));
+        }
+        self.sphere = self.sphere.max(sphere);
+        self.words.push(word << 8 | u64::from(sphere));
+    }
+
+    /// The key in `word`.
+    fn key(&self, word: u64) -> SeenKey {
+        let first = self.first.unwrap_or_default();
+        let coordinate = |c: usize| {
+            let shift = 8 + RAW_BITS * (2 - c as u32);
+            let offset = (word >> shift & ((1 << RAW_BITS) - 1)) as i64;
+            (i64::from(first[c]) + offset - (1 << (RAW_BITS - 1))) as i32
+        };
+        (coordinate(0), coordinate(1), coordinate(2), word as u8)
+    }
+
+    /// The keys sorted ([`PathKeys`]), repacked in place with their indices where the
+    /// extent allows; else as pairs, the keys taken again from `spheres`, the path's spheres.
+    fn sorted(mut self, spheres: &RecordBytes<'_, PathSphere>) -> PathKeys {
+        let last = self.words.len().saturating_sub(1) as u32;
+        let packing = Packing::fitting(self.least, self.most, self.sphere, last);
+        match packing.filter(|_| !self.wide && !self.words.is_empty()) {
+            Some(p) => {
+                let mut words = std::mem::take(&mut self.words);
+                for (i, w) in words.iter_mut().enumerate() {
+                    *w = p.pack(&(self.key(*w), i as u32));
+                }
+                PathKeys::packed(p, words)
+            }
+            None => PathKeys::of(
+                (0..spheres.len())
+                    .map(|i| (seen_key(&spheres.get(i)), i as u32))
+                    .collect(),
+            ),
+        }
+    }
 }
 
 /// An order-preserving map of a path's keys, each with its sphere's index, into one `u64`:
 /// the offsets of the coordinates from the path's least, the robot sphere and the index, in
 /// that order, each in as many bits as the path needs (a lesson reaching 1.5 m along each
 /// axis with 45,000 spheres needs 61).
+#[derive(Clone, Debug, PartialEq)]
 struct Packing {
     least: [i32; 3],
     /// Bit widths of x, y, z, the robot sphere and the index.
@@ -587,8 +733,14 @@ impl Packing {
             }
             (sphere, index) = (sphere.max(*s), index.max(*i));
         }
+        Self::fitting(least, most, sphere, index).filter(|_| !keys.is_empty())
+    }
+
+    /// The packing of keys within `least..=most`, robot spheres up to `sphere` and indices
+    /// up to `index`, or None when they need more than 64 bits.
+    fn fitting(least: [i32; 3], most: [i32; 3], sphere: u8, index: u32) -> Option<Self> {
         let bits = |v: u64| u64::BITS - v.leading_zeros();
-        let extent = |c: usize| (i64::from(most[c]) - i64::from(least[c])) as u64;
+        let extent = |c: usize| (i64::from(most[c]) - i64::from(least[c])).max(0) as u64;
         let width = [
             bits(extent(0)),
             bits(extent(1)),
@@ -596,8 +748,7 @@ impl Packing {
             bits(u64::from(sphere)),
             bits(u64::from(index)),
         ];
-        (!keys.is_empty() && width.iter().sum::<u32>() <= u64::BITS)
-            .then_some(Packing { least, width })
+        (width.iter().sum::<u32>() <= u64::BITS).then_some(Packing { least, width })
     }
 
     /// Where each field starts, from the lowest bit: x, y, z, sphere, index.
@@ -967,17 +1118,29 @@ mod tests {
                 .kmerge()
                 .dedup_by(|a, b| a.0 == b.0)
                 .collect();
-            // Each run's indices from its least, offset by it as a path's are.
-            let runs = runs
+            // Each run's indices from its least, offset by it as a path's are; every other
+            // run's keys packed as a path keeps them (when they fit).
+            let offset: Vec<(u32, Vec<(SeenKey, u32)>)> = runs
                 .iter()
                 .map(|r| {
                     let start = r.iter().map(|e| e.1).min().unwrap_or(0);
-                    let keys: Vec<(SeenKey, u32)> =
-                        r.iter().map(|&(k, i)| (k, i - start)).collect();
-                    Run {
-                        keys: keys.into(),
-                        start,
-                    }
+                    (start, r.iter().map(|&(k, i)| (k, i - start)).collect())
+                })
+                .collect();
+            let packed: Vec<PathKeys> = offset
+                .iter()
+                .map(|(_, k)| PathKeys::of(k.clone()))
+                .collect();
+            let runs = offset
+                .iter()
+                .zip(&packed)
+                .enumerate()
+                .map(|(j, ((start, keys), packed))| Run {
+                    keys: match j % 2 {
+                        0 => RunKeys::Pairs(keys.into()),
+                        _ => packed.run(0..packed.len()),
+                    },
+                    start: *start,
                 })
                 .collect();
             assert_eq!(merged(runs).collect::<Vec<_>>(), want, "trial {trial}");
@@ -1088,15 +1251,59 @@ mod tests {
             for (k, i) in &keys {
                 reference.entry(*k).or_insert(*i);
             }
-            let packs = Packing::of(&keys).is_some();
-            sort_unique(&mut keys);
+            let sorted = PathKeys::of(keys);
             assert_eq!(
-                keys,
+                sorted.to_vec(),
                 reference.into_iter().collect::<Vec<_>>(),
                 "case {case}"
             );
             // Packed whenever the fields fit: always at a reach of a few thousand grid steps.
+            let packs = matches!(sorted, PathKeys::Packed(..));
             assert_eq!(packs, n > 0 && reach <= 3000, "case {case}");
+        }
+    }
+
+    /// The keys `SweptPath::of` gathers one sphere at a time ([`RawKeys`], each in a word of
+    /// offsets from the first) sort to exactly the keys the pairs sort to, packing included:
+    /// within a few grid steps and within metres (packed), and beyond the words' ±26 m (taken
+    /// again from the spheres; pairs, too wide to pack).
+    #[test]
+    fn raw_keys_sort_as_their_pairs_do() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(23);
+        for (case, reach) in [2, 7_000, 150_000, 1 << 24]
+            .into_iter()
+            .cycle()
+            .take(24)
+            .enumerate()
+        {
+            let n = rng.random_range(0..2000);
+            let first: [i32; 3] = core::array::from_fn(|_| rng.random_range(-20_000..20_000));
+            let spheres: Vec<PathSphere> = (0..n)
+                .map(|_| {
+                    // On the key grid, up to 0.4 steps off it.
+                    let mut c = |f: i32| {
+                        let k = f + rng.random_range(-reach..=reach);
+                        (k as f64 + rng.random_range(-0.4..0.4)) * 2e-4
+                    };
+                    let centre = Vector3::new(c(first[0]), c(first[1]), c(first[2]));
+                    PathSphere {
+                        centre,
+                        sphere: rng.random_range(0..42),
+                    }
+                })
+                .collect();
+            let mut raw = RawKeys::with_capacity(n);
+            let mut pairs = Vec::new();
+            for (i, s) in spheres.iter().enumerate() {
+                raw.push(seen_key(s));
+                pairs.push((seen_key(s), i as u32));
+            }
+            let records = RecordBytes::written(&[], &spheres);
+            let (wide, from_raw) = (raw.wide, raw.sorted(&records));
+            assert_eq!(from_raw, PathKeys::of(pairs), "case {case}");
+            assert_eq!(wide, reach > 1 << 17, "case {case}");
+            let packed = matches!(from_raw, PathKeys::Packed(..));
+            assert_eq!(packed, n > 0 && reach <= 7_000, "case {case}");
         }
     }
 
