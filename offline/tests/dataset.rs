@@ -77,9 +77,13 @@ fn line(file: &Path, line: usize) -> String {
         .to_string()
 }
 
-/// Reads and expects an error in `file` at `line`; returns its kind.
+/// Reads and expects an error in `file` at `line`; returns its kind. Parsing first and
+/// checking against the model after (`prf learn --add`'s way) gives the same error.
 fn rejected(dir: &Path, file: &str, line: Option<usize>) -> ErrorKind {
-    let e = Dataset::read(dir, &RobotModel::kmr_iiwa14()).expect_err("must be rejected");
+    let model = RobotModel::kmr_iiwa14();
+    let e = Dataset::read(dir, &model).expect_err("must be rejected");
+    let parsed = Dataset::parse(dir).and_then(|p| p.check(&model));
+    assert_eq!(parsed.err().as_ref(), Some(&e));
     assert_eq!(e.file, dir.join(file), "{e}");
     assert_eq!(e.line, line, "{e}");
     let msg = e.to_string();
@@ -97,6 +101,8 @@ fn rejected(dir: &Path, file: &str, line: Option<usize>) -> ErrorKind {
 fn round_trip_preserves_everything() {
     let dir = written("round-trip");
     let back = Dataset::read(dir.path(), &RobotModel::kmr_iiwa14()).expect("valid dataset");
+    let parsed = Dataset::parse(dir.path()).expect("parsed");
+    assert_eq!(parsed.check(&RobotModel::kmr_iiwa14()).as_ref(), Ok(&back));
     let orig = small();
     assert_eq!(back.parts, orig.parts);
     assert_eq!(back.locations, orig.locations);

@@ -106,6 +106,37 @@ pub struct Dataset {
     pub demonstrations: Vec<Demonstration>,
 }
 
+/// A dataset read, its numbers parsed, not yet checked against a robot ([`Dataset::parse`]).
+/// What failed to read or parse is kept, in file order, for [`ParsedDataset::check`].
+pub struct ParsedDataset {
+    manifest: Manifest,
+    /// Per demonstration: its id, its task, and its trajectory's file and rows.
+    #[allow(clippy::type_complexity)]
+    demonstrations: Vec<(
+        String,
+        Result<TaskRecord, DatasetError>,
+        Result<(PathBuf, Rows), DatasetError>,
+    )>,
+}
+
+impl ParsedDataset {
+    /// The dataset checked against `model`'s joint limits: what [`Dataset::read`] gives with
+    /// `model`, its first error included.
+    pub fn check(self, model: &RobotModel) -> Result<Dataset, DatasetError> {
+        let mut demonstrations = Vec::with_capacity(self.demonstrations.len());
+        for (id, task, rows) in self.demonstrations {
+            let task = task?;
+            let (cpath, rows) = rows?;
+            demonstrations.push(Demonstration {
+                id,
+                task,
+                samples: rows.samples(&cpath, model)?,
+            });
+        }
+        Ok(Dataset::of(self.manifest, demonstrations))
+    }
+}
+
 /// What is wrong with a dataset.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ErrorKind {
@@ -279,7 +310,34 @@ impl Dataset {
                 samples,
             });
         }
-        Ok(Dataset {
+        Ok(Dataset::of(manifest, demonstrations))
+    }
+
+    /// The dataset in `dir` read and its numbers parsed, to be checked against a robot's
+    /// joint limits once the model is known ([`ParsedDataset::check`]): the part of
+    /// [`Dataset::read`] that needs no model, so it may run beside what gives the model
+    /// (`prf learn --add` reads its knowledge base meanwhile).
+    pub fn parse(dir: &Path) -> Result<ParsedDataset, DatasetError> {
+        let mpath = dir.join(MANIFEST);
+        let manifest = parse_manifest(&mpath, &read_text(&mpath)?)?;
+        let demonstrations = manifest
+            .demonstrations
+            .iter()
+            .map(|entry| {
+                let (tpath, cpath) = (dir.join(&entry.task), dir.join(&entry.trajectory));
+                let task = read_text(&tpath).and_then(|t| parse_task(&tpath, &t, &manifest));
+                let rows = read_text(&cpath).and_then(|t| Rows::parse(&cpath, &t));
+                (entry.id.clone(), task, rows.map(|r| (cpath, r)))
+            })
+            .collect();
+        Ok(ParsedDataset {
+            manifest,
+            demonstrations,
+        })
+    }
+
+    fn of(manifest: Manifest, demonstrations: Vec<Demonstration>) -> Dataset {
+        Dataset {
             robot: manifest.robot,
             description: manifest.description,
             rate_hz: manifest.rate_hz,
@@ -287,7 +345,7 @@ impl Dataset {
             parts: manifest.parts,
             locations: manifest.locations,
             demonstrations,
-        })
+        }
     }
 
     /// Writes the dataset to `dir` whole or not at all: `manifest.json`, and per demonstration
@@ -463,66 +521,85 @@ pub fn parse_trajectory(
     text: &str,
     model: &RobotModel,
 ) -> Result<Vec<Sample>, DatasetError> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
-    let header = lines.next().map(|(_, l)| l).unwrap_or("");
-    let columns: Vec<&str> = header.split(',').map(str::trim).collect();
-    if columns != CSV_HEADER {
-        return Err(err(
-            path,
-            Some(1),
-            ErrorKind::BadHeader {
-                found: header.to_string(),
-            },
-        ));
-    }
-    let rows: Vec<(usize, &str)> = lines.filter(|(_, l)| !l.trim().is_empty()).collect();
-    let numbers: Vec<Result<[f64; 12], ErrorKind>> =
-        rows.par_iter().map(|(_, line)| parse_row(line)).collect();
-    let mut samples: Vec<Sample> = Vec::with_capacity(rows.len());
-    for (&(line_no, _), v) in rows.iter().zip(numbers) {
-        let at = |kind| err(path, Some(line_no), kind);
-        let v = v.map_err(at)?;
-        let s = Sample {
-            t: v[0],
-            base: [v[1], v[2], v[3]],
-            arm: std::array::from_fn(|j| v[4 + j]),
-            gripper: v[11],
-        };
-        if let Some(prev) = samples.last()
-            && !(s.t > prev.t)
-        {
-            return Err(at(ErrorKind::NonMonotonicTime {
-                previous: prev.t,
-                value: s.t,
-            }));
+    Rows::parse(path, text)?.samples(path, model)
+}
+
+/// A trajectory's rows parsed into numbers (in parallel), each with its line, not yet
+/// checked: the part of [`parse_trajectory`] that needs no robot model.
+struct Rows(Vec<(usize, Result<[f64; 12], ErrorKind>)>);
+
+impl Rows {
+    /// The rows of the trajectory `text` (read from `path`) after its header.
+    fn parse(path: &Path, text: &str) -> Result<Rows, DatasetError> {
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+        let header = lines.next().map(|(_, l)| l).unwrap_or("");
+        let columns: Vec<&str> = header.split(',').map(str::trim).collect();
+        if columns != CSV_HEADER {
+            return Err(err(
+                path,
+                Some(1),
+                ErrorKind::BadHeader {
+                    found: header.to_string(),
+                },
+            ));
         }
-        if let Some((joint, value)) = model.limit_violation(&s.arm) {
-            let j = &model.joints[joint];
-            return Err(at(ErrorKind::JointLimit {
-                joint: joint + 1,
-                value,
-                lower: j.lower,
-                upper: j.upper,
-            }));
-        }
-        if !(0.0..=1.0).contains(&s.gripper) {
-            return Err(at(ErrorKind::Gripper { value: s.gripper }));
-        }
-        samples.push(s);
+        let rows: Vec<(usize, &str)> = lines.filter(|(_, l)| !l.trim().is_empty()).collect();
+        Ok(Rows(
+            rows.par_iter()
+                .map(|(line_no, line)| (*line_no, parse_row(line)))
+                .collect(),
+        ))
     }
-    if samples.len() < 2 {
-        return Err(err(
-            path,
-            None,
-            ErrorKind::TooShort {
-                rows: samples.len(),
-            },
-        ));
+
+    /// The samples, checked in row order: numbers, times rising, within `model`'s joint
+    /// limits, gripper in [0, 1]; the first failure with its line of `path`.
+    fn samples(self, path: &Path, model: &RobotModel) -> Result<Vec<Sample>, DatasetError> {
+        let mut samples: Vec<Sample> = Vec::with_capacity(self.0.len());
+        for (line_no, v) in self.0 {
+            let at = |kind| err(path, Some(line_no), kind);
+            let v = v.map_err(at)?;
+            let s = Sample {
+                t: v[0],
+                base: [v[1], v[2], v[3]],
+                arm: std::array::from_fn(|j| v[4 + j]),
+                gripper: v[11],
+            };
+            if let Some(prev) = samples.last()
+                && !(s.t > prev.t)
+            {
+                return Err(at(ErrorKind::NonMonotonicTime {
+                    previous: prev.t,
+                    value: s.t,
+                }));
+            }
+            if let Some((joint, value)) = model.limit_violation(&s.arm) {
+                let j = &model.joints[joint];
+                return Err(at(ErrorKind::JointLimit {
+                    joint: joint + 1,
+                    value,
+                    lower: j.lower,
+                    upper: j.upper,
+                }));
+            }
+            if !(0.0..=1.0).contains(&s.gripper) {
+                return Err(at(ErrorKind::Gripper { value: s.gripper }));
+            }
+            samples.push(s);
+        }
+        if samples.len() < 2 {
+            return Err(err(
+                path,
+                None,
+                ErrorKind::TooShort {
+                    rows: samples.len(),
+                },
+            ));
+        }
+        Ok(samples)
     }
-    Ok(samples)
 }
 
 /// The comma-separated fields of `line`, as `line.split(',')` gives them, found byte by byte:

@@ -145,14 +145,19 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let file: KbFile = Arc::new(map(kb).with_context(|| format!("reading {}", kb.display()))?);
     let bytes = (*file).as_ref();
-    // The sweeps stay in the file until a rebuild reads them: only the touched types' are.
-    let mut learner =
-        Learner::open(file.clone()).with_context(|| format!("reading {}", kb.display()))?;
+    // The datasets are read and parsed while the knowledge base is read (its robot model
+    // checks them after). The sweeps stay in the file until a rebuild reads them: only the
+    // touched types' are.
+    let (learner, parsed) = rayon::join(
+        || Learner::open(file.clone()),
+        || a.add.iter().map(|d| Dataset::parse(d)).collect::<Vec<_>>(),
+    );
+    let mut learner = learner.with_context(|| format!("reading {}", kb.display()))?;
     let t_load = t0.elapsed().as_secs_f64();
     let before = learner.demonstrations();
     let mut demos = Vec::new();
-    for dir in &a.add {
-        let ds = Dataset::read(dir, learner.robot())?;
+    for (dir, parsed) in a.add.iter().zip(parsed) {
+        let ds = parsed?.check(learner.robot())?;
         learner
             .admits(&ds)
             .with_context(|| format!("adding {} to {}", dir.display(), kb.display()))?;
