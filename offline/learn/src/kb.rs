@@ -681,7 +681,7 @@ pub(crate) fn section(sweep: &SweepState<'_>) -> Vec<u8> {
 }
 
 /// The lessons of an addition (`AdditionState::lessons`) in postcard: the record's first
-/// field, encoded on its own ([`AdditionRecord`]), in pieces ([`Pieces`]): the swept paths'
+/// field, encoded on its own ([`AdditionRecord`]), in pieces (`Pieces`): the swept paths'
 /// sphere records, most of an addition's bytes, stay where the paths keep them.
 pub struct LessonsPart(Vec<Piece>);
 
