@@ -207,7 +207,7 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
                 .join(", ")
         );
         println!(
-            "time: load {t_load:.3} s, learn {t_learn:.3} s ({}), compile {t_compile:.3} s, write {t_write:.3} s; total {:.3} s",
+            "time: load and read {t_load:.3} s, learn {t_learn:.3} s ({}), compile {t_compile:.3} s, write {t_write:.3} s; total {:.3} s",
             k.timings
                 .iter()
                 .map(|(n, t)| format!("{n} {t:.3} s"))
