@@ -719,6 +719,10 @@ struct Packing {
     least: [i32; 3],
     /// Bit widths of x, y, z, the robot sphere and the index.
     width: [u32; 5],
+    /// Where each field starts, from the lowest bit, and its mask (derived from `width`: a
+    /// merge unpacks two keys per key it gives).
+    shift: [u32; 5],
+    mask: [u64; 5],
 }
 
 impl Packing {
@@ -748,19 +752,21 @@ impl Packing {
             bits(u64::from(sphere)),
             bits(u64::from(index)),
         ];
-        (width.iter().sum::<u32>() <= u64::BITS).then_some(Packing { least, width })
-    }
-
-    /// Where each field starts, from the lowest bit: x, y, z, sphere, index.
-    fn shifts(&self) -> [u32; 5] {
-        let w = &self.width;
-        [
+        let w = &width;
+        let shift = [
             w[1] + w[2] + w[3] + w[4],
             w[2] + w[3] + w[4],
             w[3] + w[4],
             w[4],
             0,
-        ]
+        ];
+        let mask = width.map(|b| u64::MAX.checked_shr(u64::BITS - b).unwrap_or(0));
+        (width.iter().sum::<u32>() <= u64::BITS).then_some(Packing {
+            least,
+            width,
+            shift,
+            mask,
+        })
     }
 
     /// `(key, index)` packed: ordered as the pairs are.
@@ -775,7 +781,7 @@ impl Packing {
         ];
         fields
             .iter()
-            .zip(self.shifts())
+            .zip(self.shift)
             .fold(0, |w, (f, s)| w | f.checked_shl(s).unwrap_or(0))
     }
 
@@ -785,12 +791,10 @@ impl Packing {
     }
 
     /// The pair [`Packing::pack`] packed into `w`.
+    #[inline]
     fn unpack(&self, w: u64) -> (SeenKey, u32) {
-        let shifts = self.shifts();
-        let field = |f: usize| {
-            let mask = u64::MAX.checked_shr(u64::BITS - self.width[f]).unwrap_or(0);
-            w.checked_shr(shifts[f]).unwrap_or(0) & mask
-        };
+        // A field that starts at bit 64 has no bits: its mask is 0.
+        let field = |f: usize| (w >> (self.shift[f] & (u64::BITS - 1))) & self.mask[f];
         let coordinate = |c: usize| (i64::from(self.least[c]) + field(c) as i64) as i32;
         (
             (coordinate(0), coordinate(1), coordinate(2), field(3) as u8),
