@@ -12,7 +12,7 @@ pub use frame::{Frame, quaternion_of};
 
 use crate::robot::{LINK_TOOL, N_FRAMES, RobotModel};
 use crate::se3::Pose;
-use crate::{Jacobian, JacobianT, JointVector, NA};
+use crate::{Jacobian, JointVector, NA};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 /// Everything one kinematics evaluation yields at a configuration q_a.
@@ -42,19 +42,14 @@ impl ArmKinematics {
     /// Geometric Jacobian of the TCP, 6×7, rows [v; ω] in the arm base frame:
     /// column i = [z_i × (p_e − p_i); z_i], z_i the axis of joint i (a column of frame i + 1).
     pub fn jacobian(&self, model: &RobotModel) -> Jacobian {
-        self.jacobian_t(model).transpose()
-    }
-
-    /// Jᵀ ([`ArmKinematics::jacobian`] transposed): row i = [z_i × (p_e − p_i); z_i]ᵀ.
-    pub fn jacobian_t(&self, model: &RobotModel) -> JacobianT {
         let pe = self.tcp.translation.vector;
-        let mut jt = JacobianT::zeros();
+        let mut j = Jacobian::zeros();
         for (i, joint) in model.joints.iter().enumerate() {
             let f = &self.frames[i + 1];
             let z = joint_axis(f, &joint.axis, is_z(&joint.axis));
-            row_into(&mut jt, i, &z, &pe, &f.origin);
+            column_into(&mut j, i, &z, &pe, &f.origin);
         }
-        jt
+        j
     }
 
     /// Centres of the model's collision spheres in the arm base frame, written to `out`
@@ -105,12 +100,11 @@ impl Chain {
         self.walk(model, q, |_, _| {}).pose()
     }
 
-    /// The TCP frame and the Jacobian's transpose alone (what an RDMP step needs), with the
-    /// bits of [`Chain::kinematics`]' `tcp` (as [`Frame::pose`]) and
-    /// [`ArmKinematics::jacobian_t`]: the same frames, computed alike, but only each joint's
-    /// axis and origin kept.
+    /// The TCP frame and the Jacobian alone (what an RDMP step needs), with the bits of
+    /// [`Chain::kinematics`]' `tcp` (as [`Frame::pose`]) and [`ArmKinematics::jacobian`]: the
+    /// same frames, computed alike, but only each joint's axis and origin kept.
     #[inline(always)]
-    pub fn tcp_and_jacobian_t(&self, model: &RobotModel, q: &JointVector) -> (Frame, JacobianT) {
+    pub fn tcp_and_jacobian(&self, model: &RobotModel, q: &JointVector) -> (Frame, Jacobian) {
         let mut axes = [(Vector3::zeros(), Vector3::zeros()); NA];
         let tcp = self.walk(model, q, |k, f| {
             if let Some(a) = axes.get_mut(k.wrapping_sub(1)) {
@@ -118,15 +112,15 @@ impl Chain {
             }
         });
         let pe = tcp.origin;
-        let mut jt = JacobianT::zeros();
+        let mut j = Jacobian::zeros();
         for (i, (z, o)) in axes.iter().enumerate() {
-            row_into(&mut jt, i, z, &pe, o);
+            column_into(&mut j, i, z, &pe, o);
         }
-        (tcp, jt)
+        (tcp, j)
     }
 
     /// The TCP frame of `kin` (computed by this chain): its flange frame times the TCP's
-    /// transform, with the bits [`Chain::tcp_and_jacobian_t`] gives.
+    /// transform, with the bits [`Chain::tcp_and_jacobian`] gives.
     #[inline(always)]
     pub fn tcp_frame_of(&self, model: &RobotModel, kin: &ArmKinematics) -> Frame {
         self.tcp_frame(model, &kin.frames[LINK_TOOL])
@@ -178,14 +172,12 @@ fn joint_axis(f: &Frame, axis: &Vector3<f64>, about_z: bool) -> Vector3<f64> {
     }
 }
 
-/// Column i of the geometric Jacobian, [z_i × (p_e − p_i); z_i], as row i of Jᵀ.
+/// Column i of the geometric Jacobian, [z_i × (p_e − p_i); z_i] (six entries in a row in
+/// memory: J is column-major).
 #[inline(always)]
-fn row_into(jt: &mut JacobianT, i: usize, z: &Vector3<f64>, pe: &Vector3<f64>, o: &Vector3<f64>) {
+fn column_into(j: &mut Jacobian, i: usize, z: &Vector3<f64>, pe: &Vector3<f64>, o: &Vector3<f64>) {
     let v = z.cross(&(pe - o));
-    for c in 0..3 {
-        jt[(i, c)] = v[c];
-        jt[(i, 3 + c)] = z[c];
-    }
+    j.data.0[i] = [v.x, v.y, v.z, z.x, z.y, z.z];
 }
 
 /// The frames of one [`ArmKinematics`] where the arm base is at `base`, each composed

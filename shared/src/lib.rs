@@ -52,7 +52,3 @@ pub type JointVector = nalgebra::SVector<f64, NA>;
 
 /// Geometric Jacobian of the arm, 6×n_a, rows [v; ω].
 pub type Jacobian = nalgebra::SMatrix<f64, 6, NA>;
-
-/// The Jacobian's transpose Jᵀ, n_a×6, the way the RDMP step's QR reads it (its columns, the
-/// rows of J, lie contiguous in memory).
-pub type JacobianT = nalgebra::SMatrix<f64, NA, 6>;

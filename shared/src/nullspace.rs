@@ -16,7 +16,7 @@
 //! factorisation gives the minimum-norm solution J⁺V = Q [R⁻ᵀV; 0], so one QR per tick
 //! serves both M and J⁺ (Alg. 2, line 22).
 
-use crate::{Jacobian, JacobianT, JointVector};
+use crate::{Jacobian, JointVector};
 use nalgebra::Vector6;
 
 /// Relative size of R's smallest diagonal entry below which J counts as rank deficient.
@@ -52,23 +52,22 @@ impl JacobianQr {
     /// factorisation as [`JacobianQr::new_looped`] to rounding (test
     /// `the_step_qr_agrees_with_the_previous_one`).
     pub fn new(j: &Jacobian) -> Self {
-        Self::of_transpose(&j.transpose())
+        Self::new_beside(j, |_| {})
     }
 
-    /// [`JacobianQr::new`] of J given as Jᵀ (what the RDMP step's kinematics give), the
-    /// same bits.
-    pub fn of_transpose(jt: &JacobianT) -> Self {
-        Self::of_transpose_beside(jt, |_| {})
-    }
-
-    /// [`JacobianQr::of_transpose`], calling `beside(k)` after Householder step k (0..6):
-    /// work independent of J placed there runs while the next steps wait on their square
-    /// root and division (the RDMP step's DMPs, [`crate::rdmp::RdmpRun::step`]). The same
-    /// bits.
+    /// [`JacobianQr::new`], calling `beside(k)` after Householder step k (0..6): work
+    /// independent of J placed there runs while the next steps wait on their square root and
+    /// division (the RDMP step's DMPs, [`crate::rdmp::RdmpRun::step`]). The same bits.
+    ///
+    /// Jᵀ is held as its rows, J's columns (`j.data.0`, one joint's six entries each), and
+    /// every step works along them: each row's products with the pivot column and its update
+    /// are element-wise over the columns, which the host's vector unit takes two or four at
+    /// a time, where the columns' dot products were sums across one array. Each entry is
+    /// computed by the operations, in the order, of the column-wise form.
     #[inline(always)]
-    pub fn of_transpose_beside(jt: &JacobianT, mut beside: impl FnMut(usize)) -> Self {
-        // a = Jᵀ's columns: a[c][row] is Jᵀ(row, c).
-        let mut a = jt.data.0;
+    pub fn new_beside(j: &Jacobian, mut beside: impl FnMut(usize)) -> Self {
+        // a[row] is row `row` of Jᵀ: a[row][c] = Jᵀ(row, c) = J(c, row).
+        let mut a = j.data.0;
         let mut qr = JacobianQr {
             v: [[0.0; 7]; 6],
             beta: [0.0; 6],
@@ -204,53 +203,65 @@ fn finite(y: [f64; 7]) -> Option<JointVector> {
     out.iter().all(|x| x.is_finite()).then_some(out)
 }
 
-/// Householder step K of [`JacobianQr::new`] on the remaining columns of `a`, with the loop
-/// bounds known at compile time. H_K = I − β v vᵀ with v = a_K − α e_K, α = −sign(a_KK)‖a_K‖
-/// (rows K..7), so vᵀv = 2‖a_K‖(‖a_K‖ + |a_KK|).
+/// Householder step K of [`JacobianQr::new`] on the rows of Jᵀ below K, with the loop bounds
+/// known at compile time. H_K = I − β v vᵀ with v = a_K − α e_K, α = −sign(a_KK)‖a_K‖ (a_K:
+/// column K, rows K..7), so vᵀv = 2‖a_K‖(‖a_K‖ + |a_KK|). The products a_Kᵀa_c of every
+/// column c ≥ K (‖a_K‖² among them) are one pairwise sum over the rows of a_rK · row r.
 #[inline(always)]
-fn reflect<const K: usize>(a: &mut [[f64; 7]; 6], qr: &mut JacobianQr) {
-    let mut d = [0.0; 6];
-    for c in K + 1..6 {
-        d[c] = dot_tree::<K>(&a[K], &a[c]);
-    }
-    let norm = crate::float::sqrt(dot_tree::<K>(&a[K], &a[K]));
+fn reflect<const K: usize>(a: &mut [[f64; 6]; 7], qr: &mut JacobianQr) {
+    let d = tree::<K, _>(
+        |r| {
+            let x = a[r][K];
+            a[r].map(|y| x * y)
+        },
+        |p, q| core::array::from_fn(|c| p[c] + q[c]),
+    );
+    let norm = crate::float::sqrt(d[K]);
     let akk = a[K][K];
     let alpha = if akk >= 0.0 { -norm } else { norm };
     let mut vk = [0.0; 7];
-    vk[K..].copy_from_slice(&a[K][K..]);
+    for r in K..7 {
+        vk[r] = a[r][K];
+    }
     vk[K] -= alpha;
     if norm > 0.0 {
         let beta = 1.0 / (norm * (norm + f64::abs(akk)));
         qr.beta[K] = beta;
         qr.det_q = -qr.det_q;
+        let mut s = [0.0; 6];
         for c in K + 1..6 {
-            let col = &mut a[c];
-            let s = beta * (d[c] - alpha * col[K]);
-            for i in K..7 {
-                col[i] -= s * vk[i];
+            s[c] = beta * (d[c] - alpha * a[K][c]);
+        }
+        for r in K..7 {
+            for c in K + 1..6 {
+                a[r][c] -= s[c] * vk[r];
             }
         }
     }
     qr.r[K][K] = if norm > 0.0 { alpha } else { akk };
-    for c in (K + 1)..6 {
-        qr.r[K][c] = a[c][K];
-    }
+    qr.r[K][K + 1..].copy_from_slice(&a[K][K + 1..]);
     qr.v[K] = vk;
 }
 
-/// Σ_{i ≥ K} a_i b_i summed pairwise (a tree of depth 3 at most).
+/// Σ_{i ≥ K} p(i) summed pairwise (a tree of depth 3 at most), `add` adding two terms.
 #[inline(always)]
-fn dot_tree<const K: usize>(a: &[f64; 7], b: &[f64; 7]) -> f64 {
-    let p = |i: usize| a[i] * b[i];
+fn tree<const K: usize, T: Copy>(p: impl Fn(usize) -> T, add: impl Fn(T, T) -> T) -> T {
+    let s = |i: usize, j: usize| add(p(i), p(j));
     match K {
-        0 => ((p(0) + p(1)) + (p(2) + p(3))) + ((p(4) + p(5)) + p(6)),
-        1 => ((p(1) + p(2)) + (p(3) + p(4))) + (p(5) + p(6)),
-        2 => ((p(2) + p(3)) + (p(4) + p(5))) + p(6),
-        3 => (p(3) + p(4)) + (p(5) + p(6)),
-        4 => (p(4) + p(5)) + p(6),
-        5 => p(5) + p(6),
+        0 => add(add(s(0, 1), s(2, 3)), add(s(4, 5), p(6))),
+        1 => add(add(s(1, 2), s(3, 4)), s(5, 6)),
+        2 => add(add(s(2, 3), s(4, 5)), p(6)),
+        3 => add(s(3, 4), s(5, 6)),
+        4 => add(s(4, 5), p(6)),
+        5 => s(5, 6),
         _ => p(6),
     }
+}
+
+/// Σ_{i ≥ K} a_i b_i summed pairwise ([`tree`]).
+#[inline(always)]
+fn dot_tree<const K: usize>(a: &[f64; 7], b: &[f64; 7]) -> f64 {
+    tree::<K, _>(|i| a[i] * b[i], |x, y| x + y)
 }
 
 /// y ← H_K y, reflection K of Q (`apply_q`).
@@ -266,12 +277,23 @@ fn reflect_one<const K: usize>(qr: &JacobianQr, y: &mut [f64; 7]) {
     }
 }
 
-/// Reflection K of Q applied to two vectors (each as [`reflect_one`]; inlined, the two
-/// independent chains interleave).
+/// Reflection K of Q applied to two vectors at once, held as pairs per row (`yz[i]` = (y_i,
+/// z_i)): each as [`reflect_one`], element-wise over the pair.
 #[inline(always)]
-fn reflect_pair<const K: usize>(qr: &JacobianQr, y: &mut [f64; 7], z: &mut [f64; 7]) {
-    reflect_one::<K>(qr, y);
-    reflect_one::<K>(qr, z);
+fn reflect_pair<const K: usize>(qr: &JacobianQr, yz: &mut [[f64; 2]; 7]) {
+    let beta = qr.beta[K];
+    if beta != 0.0 {
+        let vk = &qr.v[K];
+        let d = tree::<K, _>(
+            |i| yz[i].map(|y| vk[i] * y),
+            |p, q| [p[0] + q[0], p[1] + q[1]],
+        );
+        let s = d.map(|d| beta * d);
+        for i in K..7 {
+            yz[i][0] -= s[0] * vk[i];
+            yz[i][1] -= s[1] * vk[i];
+        }
+    }
 }
 
 impl JacobianQr {
@@ -289,15 +311,17 @@ impl JacobianQr {
     /// an AMD EPYC VM, 186 instructions fewer (`prf bench --profile-steps`).
     #[inline(always)]
     pub fn kernel_and_pinv(&self, v: &Vector6<f64>) -> (Kernel, Option<JointVector>) {
-        let mut q7 = E7;
         let solved = self.r_inv_t(v);
-        let mut y = solved.unwrap_or([0.0; 7]);
-        reflect_pair::<5>(self, &mut q7, &mut y);
-        reflect_pair::<4>(self, &mut q7, &mut y);
-        reflect_pair::<3>(self, &mut q7, &mut y);
-        reflect_pair::<2>(self, &mut q7, &mut y);
-        reflect_pair::<1>(self, &mut q7, &mut y);
-        reflect_pair::<0>(self, &mut q7, &mut y);
+        let y = solved.unwrap_or([0.0; 7]);
+        // (q_7, J⁺V) row by row: Q e_7 and Q [R⁻ᵀV; 0].
+        let mut pairs: [[f64; 2]; 7] = core::array::from_fn(|i| [E7[i], y[i]]);
+        reflect_pair::<5>(self, &mut pairs);
+        reflect_pair::<4>(self, &mut pairs);
+        reflect_pair::<3>(self, &mut pairs);
+        reflect_pair::<2>(self, &mut pairs);
+        reflect_pair::<1>(self, &mut pairs);
+        reflect_pair::<0>(self, &mut pairs);
+        let (q7, y) = (pairs.map(|p| p[0]), pairs.map(|p| p[1]));
         (self.oriented(q7), solved.and(finite(y)))
     }
 }

@@ -24,7 +24,7 @@ use crate::kinematics::{ArmKinematics, Chain, Frame};
 use crate::nullspace::{JacobianQr, kernel};
 use crate::robot::RobotModel;
 use crate::se3::{Pose, Rot};
-use crate::{JacobianT, JointVector, NA};
+use crate::{Jacobian, JointVector, NA};
 use nalgebra::{Isometry3, Translation3, Vector1, Vector3, Vector6};
 
 /// A trained RDMP, w_RDMP = (w_p, w_R, w_γ, γ_g) (Alg. 1).
@@ -478,7 +478,7 @@ impl RdmpRun {
     }
 
     /// Advances one step Δt (Alg. 2, lines 14–23, closed loop). FK computes the TCP and the
-    /// Jacobian alone ([`Chain::tcp_and_jacobian_t`]), with the bits of
+    /// Jacobian alone ([`Chain::tcp_and_jacobian`]), with the bits of
     /// [`RdmpRun::step_observed`]. (The two are written out: sharing their body through a
     /// closure cost 1 % of the step, 48 instructions.)
     pub fn step(
@@ -491,8 +491,8 @@ impl RdmpRun {
             return Err(RdmpError::Finished);
         }
         let moved = Moved::of(self);
-        let (tcp, jt) = self.chain.tcp_and_jacobian_t(model, &self.q);
-        let result = self.advance(model, rdmp, cfg, &tcp, &jt);
+        let (tcp, j) = self.chain.tcp_and_jacobian(model, &self.q);
+        let result = self.advance(model, rdmp, cfg, &tcp, &j);
         if result.is_err() {
             moved.put_back(self);
         }
@@ -518,7 +518,7 @@ impl RdmpRun {
         self.chain.kinematics_into(model, &self.q, &mut kin);
         observe(&kin);
         let tcp = self.chain.tcp_frame_of(model, &kin);
-        let result = self.advance(model, rdmp, cfg, &tcp, &kin.jacobian_t(model));
+        let result = self.advance(model, rdmp, cfg, &tcp, &kin.jacobian(model));
         if result.is_err() {
             moved.put_back(self);
         }
@@ -571,7 +571,7 @@ impl RdmpRun {
         rdmp: &Rdmp,
         cfg: &RdmpConfig,
         tcp: &Frame,
-        jt: &JacobianT,
+        j: &Jacobian,
     ) -> Result<RdmpStep, RdmpError> {
         let k = self.phase.step;
         let mut dmp = DmpVelocities {
@@ -581,7 +581,7 @@ impl RdmpRun {
             w: Vector3::zeros(),
             g: 0.0,
         };
-        let qr = JacobianQr::of_transpose_beside(jt, |part| {
+        let qr = JacobianQr::new_beside(j, |part| {
             self.dmp_part(part, rdmp, cfg, &mut dmp);
         });
         let manipulability = qr.manipulability();

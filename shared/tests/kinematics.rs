@@ -256,7 +256,7 @@ fn matrix_fk_matches_quaternion_fk() {
     assert!(worst.1 < 1e-14, "RᵀR − I up to {:e}", worst.1);
 }
 
-/// What an RDMP step computes (the TCP and the Jacobian alone, `Chain::tcp_and_jacobian_t`), a
+/// What an RDMP step computes (the TCP and the Jacobian alone, `Chain::tcp_and_jacobian`), a
 /// run's start (`Chain::tcp`) and what the planner observes (every frame, then
 /// `ArmKinematics::jacobian`) are the same bits, so the executor emits what was certified.
 #[test]
@@ -271,12 +271,12 @@ fn every_entry_point_gives_the_same_bits() {
         for _ in 0..500 {
             let q = random_q(&mut rng, m);
             let all = chain.kinematics(m, &q);
-            let (tcp, jt) = chain.tcp_and_jacobian_t(m, &q);
+            let (tcp, j) = chain.tcp_and_jacobian(m, &q);
             assert_eq!(bits(&tcp.pose()), bits(&all.tcp), "q = {q:?}");
             assert_eq!(bits(&chain.tcp(m, &q)), bits(&all.tcp), "q = {q:?}");
-            let same = jt
+            let same = j
                 .iter()
-                .zip(all.jacobian_t(m).iter())
+                .zip(all.jacobian(m).iter())
                 .all(|(a, b)| a.to_bits() == b.to_bits());
             assert!(same, "q = {q:?}");
         }
@@ -324,7 +324,7 @@ fn a_frames_pose_error_is_pose_error_of_its_pose() {
     let mut rng = StdRng::seed_from_u64(23);
     let (mut series, mut worst) = (0, 0.0f64);
     for i in 0..20_000 {
-        let (frame, _) = chain.tcp_and_jacobian_t(&model, &random_q(&mut rng, &model));
+        let (frame, _) = chain.tcp_and_jacobian(&model, &random_q(&mut rng, &model));
         let axis = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)).normalize();
         let angle = match i % 4 {
             0 => rng.random_range(1e-9..1e-6),

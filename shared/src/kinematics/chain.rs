@@ -343,11 +343,11 @@ mod tests {
                     .wrapping_add(1_442_695_040_888_963_407);
                 ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 6.0
             });
-            let (tcp, jt) = chain.tcp_and_jacobian_t(&model, &q);
-            let (tcp_g, jt_g) = general.tcp_and_jacobian_t(&model, &q);
+            let (tcp, j) = chain.tcp_and_jacobian(&model, &q);
+            let (tcp_g, j_g) = general.tcp_and_jacobian(&model, &q);
             assert_eq!(
-                (tcp.rotation, tcp.origin, jt),
-                (tcp_g.rotation, tcp_g.origin, jt_g)
+                (tcp.rotation, tcp.origin, j),
+                (tcp_g.rotation, tcp_g.origin, j_g)
             );
             let (k, k_g) = (chain.kinematics(&model, &q), general.kinematics(&model, &q));
             assert_eq!(k.frames, k_g.frames);
