@@ -19,19 +19,25 @@ pub struct Forcing<const N: usize> {
 }
 
 impl<const N: usize> Forcing<N> {
-    /// f(ζ) given the features φ(ζ) and the amplitude D = g − y0 of this integration.
+    /// f(ζ) given the features φ(ζ) and the amplitude D = g − y0 of this integration. One
+    /// pass over the active bases sums every coordinate (each in index order, as a pass per
+    /// coordinate would: the same bits), reading each φ_i once.
     #[inline]
     pub fn eval(&self, phi: &Features, amplitude: &SVector<f64, N>) -> SVector<f64, N> {
-        let mut f = SVector::<f64, N>::zeros();
-        for c in 0..N {
-            let w = &self.weights[c];
-            let mut s = 0.0;
-            for i in phi.first..phi.last {
-                s += w[i] * phi.values[i];
+        let mut s = [0.0; N];
+        for i in phi.first..phi.last {
+            let p = phi.values[i];
+            for (s, w) in s.iter_mut().zip(&self.weights) {
+                *s += w[i] * p;
             }
-            f[c] = if self.scaled[c] { s * amplitude[c] } else { s };
         }
-        f
+        SVector::<f64, N>::from_fn(|c, _| {
+            if self.scaled[c] {
+                s[c] * amplitude[c]
+            } else {
+                s[c]
+            }
+        })
     }
 
     /// f(ζ_k) at the phase's step k: the value `ahead` holds when it is for this step (the
