@@ -61,9 +61,9 @@ impl JacobianQr {
     ///
     /// Jᵀ is held as its rows, J's columns (`j.data.0`, one joint's six entries each), and
     /// every step works along them: each row's products with the pivot column and its update
-    /// are element-wise over the columns, which the host's vector unit takes two or four at
-    /// a time, where the columns' dot products were sums across one array. Each entry is
-    /// computed by the operations, in the order, of the column-wise form.
+    /// are element-wise over the columns, which the host's vector unit takes two at a time,
+    /// where the columns' dot products were sums across one array. Each entry is computed by
+    /// the operations, in the order, of the column-wise form.
     #[inline(always)]
     pub fn new_beside(j: &Jacobian, mut beside: impl FnMut(usize)) -> Self {
         // a[row] is row `row` of Jᵀ: a[row][c] = Jᵀ(row, c) = J(c, row).
