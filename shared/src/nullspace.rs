@@ -45,7 +45,7 @@ pub struct JacobianQr {
 }
 
 impl JacobianQr {
-    /// The QR of Jᵀ: the six Householder steps unrolled for the 7 × 6 shape (`reflect`),
+    /// The QR of Jᵀ: the six Householder steps unrolled for the 7 × 6 shape (`householder`),
     /// with short dependency chains: dot products summed pairwise, β = 2/vᵀv taken as
     /// 1/(‖a_k‖(‖a_k‖ + |a_kk|)) from the column's norm (no second sum), and the products
     /// vᵀc = a_kᵀc − α c_k of the other columns summed before α is known. The same
@@ -74,17 +74,17 @@ impl JacobianQr {
             r: [[0.0; 6]; 6],
             det_q: 1.0,
         };
-        reflect::<0>(&mut a, &mut qr);
+        householder::<0>(&mut a, &mut qr);
         beside(0);
-        reflect::<1>(&mut a, &mut qr);
+        householder::<1>(&mut a, &mut qr);
         beside(1);
-        reflect::<2>(&mut a, &mut qr);
+        householder::<2>(&mut a, &mut qr);
         beside(2);
-        reflect::<3>(&mut a, &mut qr);
+        householder::<3>(&mut a, &mut qr);
         beside(3);
-        reflect::<4>(&mut a, &mut qr);
+        householder::<4>(&mut a, &mut qr);
         beside(4);
-        reflect::<5>(&mut a, &mut qr);
+        householder::<5>(&mut a, &mut qr);
         beside(5);
         qr
     }
@@ -129,14 +129,16 @@ impl JacobianQr {
         JacobianQr { v, beta, r, det_q }
     }
 
-    /// y ← Q y = H_0 ⋯ H_5 y.
-    fn apply_q(&self, y: &mut [f64; 7]) {
-        reflect_one::<5>(self, y);
-        reflect_one::<4>(self, y);
-        reflect_one::<3>(self, y);
-        reflect_one::<2>(self, y);
-        reflect_one::<1>(self, y);
-        reflect_one::<0>(self, y);
+    /// y ← Q y = H_0 ⋯ H_5 y for L vectors at once, held as L-tuples per row (`y[i][l]`: row
+    /// i of vector l), element-wise over the tuple.
+    #[inline(always)]
+    fn apply_q<const L: usize>(&self, y: &mut [[f64; L]; 7]) {
+        reflect::<5, L>(self, y);
+        reflect::<4, L>(self, y);
+        reflect::<3, L>(self, y);
+        reflect::<2, L>(self, y);
+        reflect::<1, L>(self, y);
+        reflect::<0, L>(self, y);
     }
 
     /// det R = ± sqrt(det(J Jᵀ)).
@@ -146,9 +148,9 @@ impl JacobianQr {
 
     /// Kernel of J, oriented as the generalized cross product of its rows.
     pub fn kernel(&self) -> Kernel {
-        let mut q7 = E7;
+        let mut q7 = E7.map(|x| [x]);
         self.apply_q(&mut q7);
-        self.oriented(q7)
+        self.oriented(q7.map(|[x]| x))
     }
 
     /// The kernel from q_7 = Q e_7: c = det Q · det R · q_7, normalised.
@@ -169,9 +171,9 @@ impl JacobianQr {
     /// Minimum-norm solution J⁺V = Q [R⁻ᵀV; 0] of J q̇ = V; `None` if J is numerically rank
     /// deficient (a diagonal entry of R below [`RANK_TOLERANCE`] × the largest one).
     pub fn pinv_apply(&self, v: &Vector6<f64>) -> Option<JointVector> {
-        let mut y = self.r_inv_t(v)?;
+        let mut y = self.r_inv_t(v)?.map(|x| [x]);
         self.apply_q(&mut y);
-        finite(y)
+        finite(y.map(|[x]| x))
     }
 
     /// [R⁻ᵀV; 0] by forward substitution, multiplying by the diagonal's reciprocals (taken
@@ -208,7 +210,7 @@ fn finite(y: [f64; 7]) -> Option<JointVector> {
 /// column K, rows K..7), so vᵀv = 2‖a_K‖(‖a_K‖ + |a_KK|). The products a_Kᵀa_c of every
 /// column c ≥ K (‖a_K‖² among them) are one pairwise sum over the rows of a_rK · row r.
 #[inline(always)]
-fn reflect<const K: usize>(a: &mut [[f64; 6]; 7], qr: &mut JacobianQr) {
+fn householder<const K: usize>(a: &mut [[f64; 6]; 7], qr: &mut JacobianQr) {
     let d = tree::<K, _>(
         |r| {
             let x = a[r][K];
@@ -258,40 +260,22 @@ fn tree<const K: usize, T: Copy>(p: impl Fn(usize) -> T, add: impl Fn(T, T) -> T
     }
 }
 
-/// Σ_{i ≥ K} a_i b_i summed pairwise ([`tree`]).
+/// y ← H_K y, reflection K of Q ([`JacobianQr::apply_q`]), for each of the L vectors in `y`:
+/// s = β v_Kᵀy summed pairwise ([`tree`]), then y − s v_K.
 #[inline(always)]
-fn dot_tree<const K: usize>(a: &[f64; 7], b: &[f64; 7]) -> f64 {
-    tree::<K, _>(|i| a[i] * b[i], |x, y| x + y)
-}
-
-/// y ← H_K y, reflection K of Q (`apply_q`).
-#[inline(always)]
-fn reflect_one<const K: usize>(qr: &JacobianQr, y: &mut [f64; 7]) {
-    let beta = qr.beta[K];
-    if beta != 0.0 {
-        let vk = &qr.v[K];
-        let s = beta * dot_tree::<K>(vk, y);
-        for i in K..7 {
-            y[i] -= s * vk[i];
-        }
-    }
-}
-
-/// Reflection K of Q applied to two vectors at once, held as pairs per row (`yz[i]` = (y_i,
-/// z_i)): each as [`reflect_one`], element-wise over the pair.
-#[inline(always)]
-fn reflect_pair<const K: usize>(qr: &JacobianQr, yz: &mut [[f64; 2]; 7]) {
+fn reflect<const K: usize, const L: usize>(qr: &JacobianQr, y: &mut [[f64; L]; 7]) {
     let beta = qr.beta[K];
     if beta != 0.0 {
         let vk = &qr.v[K];
         let d = tree::<K, _>(
-            |i| yz[i].map(|y| vk[i] * y),
-            |p, q| [p[0] + q[0], p[1] + q[1]],
+            |i| y[i].map(|y| vk[i] * y),
+            |p, q| core::array::from_fn(|l| p[l] + q[l]),
         );
         let s = d.map(|d| beta * d);
         for i in K..7 {
-            yz[i][0] -= s[0] * vk[i];
-            yz[i][1] -= s[1] * vk[i];
+            for l in 0..L {
+                y[i][l] -= s[l] * vk[i];
+            }
         }
     }
 }
@@ -315,12 +299,7 @@ impl JacobianQr {
         let y = solved.unwrap_or([0.0; 7]);
         // (q_7, J⁺V) row by row: Q e_7 and Q [R⁻ᵀV; 0].
         let mut pairs: [[f64; 2]; 7] = core::array::from_fn(|i| [E7[i], y[i]]);
-        reflect_pair::<5>(self, &mut pairs);
-        reflect_pair::<4>(self, &mut pairs);
-        reflect_pair::<3>(self, &mut pairs);
-        reflect_pair::<2>(self, &mut pairs);
-        reflect_pair::<1>(self, &mut pairs);
-        reflect_pair::<0>(self, &mut pairs);
+        self.apply_q(&mut pairs);
         let (q7, y) = (pairs.map(|p| p[0]), pairs.map(|p| p[1]));
         (self.oriented(q7), solved.and(finite(y)))
     }
