@@ -160,6 +160,20 @@ pub fn sincos(x: f64) -> (f64, f64) {
     )
 }
 
+/// atan2(y, x), libm's bits for every input. For 0 ≤ y < x (the first octant, where a
+/// rotation's log takes it: θ/2 ≤ 45°) libm's `atan2` comes to `atan(y / x)` after ruling
+/// out its special cases one by one (NaN, x = 1, y = 0, x = 0, x = ∞, |y/x| > 2⁶⁴), none of
+/// which such a pair can be: that is taken directly, without the function call and the
+/// checks. Elsewhere (and for NaN) libm's `atan2` itself.
+#[inline(always)]
+pub fn atan2(y: f64, x: f64) -> f64 {
+    if y >= 0.0 && y < x {
+        libm::atan(y / x)
+    } else {
+        libm::atan2(y, x)
+    }
+}
+
 /// [`sincos`] reads its table for |x| up to this (every joint's range with room to spare).
 pub const SINCOS_RANGE: f64 = 4.0;
 
@@ -199,6 +213,56 @@ mod tests {
             );
         }
         assert!(super::sqrt(-1.0).is_nan() && super::sqrt(f64::NAN).is_nan());
+    }
+
+    /// [`super::atan2`] gives libm's bits: random pairs in every quadrant and of every
+    /// magnitude ratio, and the special values (zeros of both signs, x = 1, ∞, NaN, y = x).
+    #[test]
+    fn atan2_is_libms_bit_for_bit() {
+        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            f64::MIN_POSITIVE / 3.0,
+            1e-300,
+            0.5,
+            1e300,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let same = |y: f64, x: f64| {
+            let (a, b) = (super::atan2(y, x), libm::atan2(y, x));
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "atan2({y:e}, {x:e}): {a:e} against libm's {b:e}"
+            );
+        };
+        for &y in &special {
+            for &x in &special {
+                same(y, x);
+            }
+            same(y, y);
+        }
+        for _ in 0..1_000_000 {
+            let (a, b) = (next(), next());
+            // Mantissas and signs at random, exponents within ±80 of each other's and of 0.
+            let at = |bits: u64, e: u64| f64::from_bits((bits & 0x800f_ffff_ffff_ffff) | (e << 52));
+            let (ey, ex) = (943 + (a >> 52) % 160, 943 + (b >> 52) % 160);
+            let (y, x) = (at(a, ey), at(b, ex));
+            same(y, x);
+            same(y.abs(), x.abs());
+            same(y.abs().min(x.abs()), y.abs().max(x.abs()));
+        }
     }
 
     /// Within an ulp of 1 (absolute) of libm's sin and cos (itself within an ulp of the
