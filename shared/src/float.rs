@@ -161,10 +161,10 @@ pub fn sincos(x: f64) -> (f64, f64) {
 }
 
 /// atan2(y, x), libm's bits for every input. For 0 ≤ y < x (the first octant, where a
-/// rotation's log takes it: θ/2 ≤ 45°) libm's `atan2` comes to `atan(y / x)` after ruling
-/// out its special cases one by one (NaN, x = 1, y = 0, x = 0, x = ∞, |y/x| > 2⁶⁴), none of
-/// which such a pair can be: that is taken directly, without the function call and the
-/// checks. Elsewhere (and for NaN) libm's `atan2` itself.
+/// rotation's log takes it for θ/2 < 45°) libm's `atan2` comes to `atan(y / x)` after its
+/// special cases, which such a pair either cannot be (NaN, x = 0, x = ∞, |y/x| > 2⁶⁴) or
+/// answers alike (x = 1: atan(y); y = 0: y): that is taken directly, without the function
+/// call and the checks. Elsewhere (and for NaN) libm's `atan2` itself.
 #[inline(always)]
 pub fn atan2(y: f64, x: f64) -> f64 {
     if y >= 0.0 && y < x {
