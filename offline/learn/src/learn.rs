@@ -19,6 +19,7 @@ use std::time::Instant;
 mod journal;
 mod stored;
 
+use journal::Grown;
 pub use stored::KbFile;
 use stored::Slot;
 
@@ -552,6 +553,9 @@ pub struct Learner {
     sweeps: Vec<Slot>,
     /// Per location type, the spheres added since the last field build, in order.
     pending: Vec<Vec<Arc<SweptPath>>>,
+    /// Per location type, the paths its last field build grew its sweep by and which of
+    /// their spheres were new (what an addition records of them, [`Learner::addition`]).
+    grown: Vec<Grown>,
     arms: Vec<ArmSkill>,
     /// K before share().
     skills: Vec<Skill>,
@@ -601,6 +605,7 @@ impl Learner {
                 location_kinds.len()
             ],
             pending: vec![Vec::new(); location_kinds.len()],
+            grown: vec![Grown::default(); location_kinds.len()],
             location_kinds,
             part_kinds,
             arms: Vec::new(),
@@ -1051,6 +1056,7 @@ impl Learner {
             location_types,
             part_types,
             sweeps,
+            grown: vec![Grown::default(); types],
             pending: st
                 .pending
                 .into_iter()
@@ -1117,7 +1123,7 @@ impl Learner {
         }
         let (wc, robot) = (self.config.workspace, &self.robot);
         // Per touched type, in parallel: its new spheres in order, then the field.
-        let rebuilt: Vec<(usize, Option<LearnedField>)> = self
+        let rebuilt: Vec<(usize, Option<LearnedField>, Grown)> = self
             .sweeps
             .par_iter_mut()
             .zip(self.pending.par_iter_mut())
@@ -1130,15 +1136,17 @@ impl Learner {
             .map(|(t, sweep, pending, known)| {
                 // The decisions of the last build recovered before its sweep grows.
                 let paths: Vec<&SweptPath> = pending.iter().map(|p| p.as_ref()).collect();
-                sweep.grow(robot, &paths, known.field.as_ref(), &wc);
+                let fresh = sweep.grow(robot, &paths, known.field.as_ref(), &wc);
+                let grown = Grown::new(pending, fresh);
                 pending.clear();
                 let f = workspace::build_field(sweep, &wc);
                 progress(Progress::Done(1));
-                (t, f)
+                (t, f, grown)
             })
             .collect();
-        for (t, f) in rebuilt {
+        for (t, f, grown) in rebuilt {
             self.location_types[t].field = f;
+            self.grown[t] = grown;
         }
         Ok(())
     }

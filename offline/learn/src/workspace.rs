@@ -147,14 +147,16 @@ impl Sweep {
     /// decisions of the build that gave `field` from the spheres before them, when the sweep
     /// has none (it was read from a knowledge base, which does not keep them), so that the
     /// next build decides only what changed ([`Certified::recover`]). The recovery and the
-    /// search for new spheres read the sweep at once, on two threads.
+    /// search for new spheres read the sweep at once, on two threads. Returns the indices of
+    /// the new spheres across `paths` (each path's after those of the paths before it),
+    /// ascending.
     pub(crate) fn grow(
         &mut self,
         model: &RobotModel,
         paths: &[&SweptPath],
         field: Option<&LearnedField>,
         cfg: &WorkspaceConfig,
-    ) {
+    ) -> Vec<u32> {
         let recover = field.filter(|_| self.certified.is_none());
         let (certified, fresh) = rayon::join(
             || recover.and_then(|f| Certified::recover(f, self.spheres.len(), cfg)),
@@ -163,7 +165,7 @@ impl Sweep {
         if recover.is_some() {
             self.certified = certified;
         }
-        self.add_fresh(fresh);
+        self.add_fresh(fresh)
     }
 
     /// The last field build's splat as plain data.
@@ -274,6 +276,7 @@ impl Sweep {
         fresh.sort_unstable_by_key(|e| e.1);
         let mut p = 0;
         let mut spheres = Vec::with_capacity(fresh.len());
+        let from = fresh.iter().map(|e| e.1).collect();
         for &(_, i) in &fresh {
             while starts.get(p + 1).is_some_and(|s| *s <= i) {
                 p += 1;
@@ -285,7 +288,11 @@ impl Sweep {
                 radius,
             });
         }
-        Fresh { keys, spheres }
+        Fresh {
+            keys,
+            spheres,
+            from,
+        }
     }
 
     /// [`Sweep::fresh`]'s new keys in `[from, to)`, ascending, with the index across `paths`
@@ -310,8 +317,8 @@ impl Sweep {
     }
 
     /// Adds what [`Sweep::fresh`] found: the keys, the spheres, and the feature balls they
-    /// thin to.
-    fn add_fresh(&mut self, fresh: Fresh) {
+    /// thin to. Returns the spheres' indices across the paths.
+    fn add_fresh(&mut self, fresh: Fresh) -> Vec<u32> {
         self.seen.insert(&fresh.keys);
         for s in &fresh.spheres {
             if self
@@ -322,6 +329,7 @@ impl Sweep {
             }
         }
         self.spheres.extend(fresh.spheres);
+        fresh.from
     }
 }
 
@@ -329,6 +337,8 @@ impl Sweep {
 struct Fresh {
     keys: Vec<SeenKey>,
     spheres: Vec<SphereSample>,
+    /// Each sphere's index across the paths it came from.
+    from: Vec<u32>,
 }
 
 /// The swept spheres of one instance ([`SweptPath::of`]) and, sorted, each of
@@ -407,6 +417,12 @@ impl SweptPath {
     /// repeated spheres: those are left out of the keys here).
     pub fn new(spheres: &[PathSphere]) -> Self {
         Self::of_records(RecordBytes::written(&[], spheres))
+    }
+
+    /// The path of its spheres at `indices`, in their order.
+    pub(crate) fn only(&self, indices: &[u32]) -> Self {
+        let spheres: Vec<PathSphere> = indices.iter().map(|&i| self.sphere(i as usize)).collect();
+        Self::new(&spheres)
     }
 
     /// [`SweptPath::new`] of the spheres as the knowledge base's records.

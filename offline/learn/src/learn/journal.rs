@@ -7,17 +7,61 @@ use crate::kb::{
     AdditionRecord, AdditionState, ArmState, FRAMES, KbError, LessonState, LessonsState,
     PathSpheres, RdmpState, Rebuilt, encode_addition, encode_lessons, pose_of, pose_state,
 };
-use crate::workspace::PathSphere;
+use crate::workspace::{PathSphere, SweptPath};
 use prf_shared::motion::CLASSES;
+use std::sync::{Arc, Weak};
+
+/// The paths a field build grew a location type's sweep by, and which of their spheres were
+/// new to it: of a lesson's path an addition records only those, since replaying the others
+/// would add nothing (d063: 3,347 of its 108 k swept spheres). The paths are held weakly, to
+/// find a lesson's among them by address without keeping them (a batch learn's are all of
+/// its programs' paths).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Grown {
+    /// Each path, and the index its spheres start at across the paths.
+    paths: Vec<(Weak<SweptPath>, u32)>,
+    /// The new spheres' indices across the paths, ascending ([`crate::workspace::Sweep::grow`]).
+    fresh: Vec<u32>,
+}
+
+impl Grown {
+    /// A build's `paths`, in the order they grew the sweep, and its `fresh` spheres.
+    pub(super) fn new(paths: &[Arc<SweptPath>], fresh: Vec<u32>) -> Self {
+        let mut start = 0;
+        let paths = paths
+            .iter()
+            .map(|p| {
+                let at = start;
+                start += p.len() as u32;
+                (Arc::downgrade(p), at)
+            })
+            .collect();
+        Grown { paths, fresh }
+    }
+
+    /// The spheres `path` added to the sweep, in order, as a path of their own; `None` if it
+    /// is not one of this build's paths.
+    fn added_by(&self, path: &Arc<SweptPath>) -> Option<SweptPath> {
+        let &(_, start) = self
+            .paths
+            .iter()
+            .find(|(p, _)| std::ptr::eq(p.as_ptr(), Arc::as_ptr(path)))?;
+        let end = start + path.len() as u32;
+        let run =
+            self.fresh.partition_point(|&i| i < start)..self.fresh.partition_point(|&i| i < end);
+        let own: Vec<u32> = self.fresh[run].iter().map(|i| i - start).collect();
+        Some(path.only(&own))
+    }
+}
 
 impl Learner {
     /// The addition record of `lessons`, each already [`Learner::add`]ed, to append to the
     /// knowledge base this learner was loaded from or saved to. It holds the lessons and,
     /// for every location type they swept whose queue [`Learner::knowledge`] has since
     /// emptied, the field and splat of that build; a type still queued is rebuilt after
-    /// loading, as it would be here.
+    /// loading, as it would be here. Of a lesson's swept spheres whose type was rebuilt it
+    /// holds those new to the sweep ([`Grown`]): replayed, they grow it as the whole path did.
     pub fn addition(&self, lessons: &[Lessons]) -> AdditionRecord {
-        let part = encode_lessons(&lessons.iter().map(lessons_state).collect::<Vec<_>>());
         let mut touched: Vec<usize> = lessons.iter().flat_map(Lessons::swept_types).collect();
         touched.sort_unstable();
         touched.dedup();
@@ -31,7 +75,19 @@ impl Learner {
                 (t, field, splat)
             })
             .collect();
-        encode_addition(part, &rebuilt)
+        let recorded = |t: usize, path: &Arc<SweptPath>| {
+            rebuilt
+                .iter()
+                .any(|r| r.0 == t)
+                .then(|| self.grown[t].added_by(path))
+                .flatten()
+                .map_or_else(|| path.clone(), Arc::new)
+        };
+        let states: Vec<LessonsState> = lessons
+            .iter()
+            .map(|l| lessons_state(l, &recorded))
+            .collect();
+        encode_addition(encode_lessons(&states), &rebuilt)
     }
 
     /// Replays an addition: its lessons added in order, then each rebuilt type's queue moved
@@ -124,8 +180,11 @@ impl Learner {
     }
 }
 
-/// `l` as plain data.
-fn lessons_state(l: &Lessons) -> LessonsState {
+/// `l` as plain data, each swept path as `recorded` gives it for its location type.
+fn lessons_state(
+    l: &Lessons,
+    recorded: &impl Fn(usize, &Arc<SweptPath>) -> Arc<SweptPath>,
+) -> LessonsState {
     LessonsState {
         demonstration: l.demonstration.clone(),
         fingerprint: l.fingerprint,
@@ -141,7 +200,12 @@ fn lessons_state(l: &Lessons) -> LessonsState {
                     let frame = FRAMES.iter().position(|g| *g == f).unwrap_or_default();
                     (frame as u8, pose_state(&p))
                 }),
-                sweep: l.sweep.clone().map(PathSpheres),
+                sweep: l.sweep.as_ref().map(|p| {
+                    PathSpheres(match l.location_type {
+                        Some(t) => recorded(t, p),
+                        None => p.clone(),
+                    })
+                }),
                 arm: l.arm.as_ref().map(|(path, dt, rdmp)| ArmState {
                     rdmp: RdmpState::of(rdmp),
                     path: path.clone(),
@@ -149,5 +213,59 @@ fn lessons_state(l: &Lessons) -> LessonsState {
                 }),
             })
             .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Grown;
+    use crate::workspace::{PathSphere, Sweep, SweptPath, WorkspaceConfig};
+    use nalgebra::Vector3;
+    use prf_shared::robot::RobotModel;
+    use rand::{RngExt, SeedableRng, rngs::StdRng};
+    use std::sync::Arc;
+
+    /// Of two paths that grow a sweep (each repeating spheres of the sweep, of the other and
+    /// of itself), an addition records the spheres each added; replayed on the sweep as it
+    /// was, they grow it to what the whole paths grew it to: the same spheres, keys, feature
+    /// balls and order.
+    #[test]
+    fn the_spheres_a_path_added_grow_the_sweep_as_the_path_did() {
+        let model = RobotModel::kmr_iiwa14();
+        let cfg = WorkspaceConfig::default();
+        let mut rng = StdRng::seed_from_u64(17);
+        // 6³ centres 1 mm apart × 3 robot spheres: 648 keys, so the paths repeat each other.
+        let mut path = |len: usize| {
+            let spheres: Vec<PathSphere> = (0..len)
+                .map(|_| {
+                    let [x, y, z] = [(); 3].map(|_| rng.random_range(0..6) as f64 * 1e-3);
+                    PathSphere {
+                        centre: Vector3::new(x, y, z),
+                        sphere: rng.random_range(0..3),
+                    }
+                })
+                .collect();
+            Arc::new(SweptPath::new(&spheres))
+        };
+        let (kept, b, c, other) = (path(300), path(400), path(400), path(50));
+        let mut whole = Sweep::new(cfg.feature_spacing);
+        whole.add_spheres(&model, &[&kept]);
+        let mut replayed = whole.clone();
+        let before = whole.spheres.len();
+        let fresh = whole.grow(&model, &[&b, &c], None, &cfg);
+        let grown = Grown::new(&[b.clone(), c.clone()], fresh);
+        let (own_b, own_c) = (grown.added_by(&b).unwrap(), grown.added_by(&c).unwrap());
+        assert!(grown.added_by(&other).is_none(), "not one of the paths");
+        assert_eq!(own_b.len() + own_c.len(), whole.spheres.len() - before);
+        assert!(
+            !own_c.is_empty() && own_c.len() < own_b.len() && own_b.len() < b.len(),
+            "{} of {} and {} of {} spheres new",
+            own_b.len(),
+            b.len(),
+            own_c.len(),
+            c.len()
+        );
+        replayed.add_spheres(&model, &[&own_b, &own_c]);
+        assert_eq!(replayed.to_state(), whole.to_state());
     }
 }
