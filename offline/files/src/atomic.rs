@@ -3,6 +3,8 @@
 //! directory by exchanging the two atomically (`renameat2(RENAME_EXCHANGE)`). A full disk, a
 //! file-size limit or a killed process leaves the previous version intact; at worst a
 //! temporary `.prf-tmp-*` entry stays beside it. An append-only file grows by [`append`].
+//! A target that is a device, pipe or socket (`-o /dev/null`, a FIFO) is written into as it
+//! is: a file renamed over it would replace the node itself.
 
 use std::fs::File;
 use std::io::{self, Write};
@@ -26,21 +28,38 @@ fn parent_created(path: &Path) -> io::Result<&Path> {
     Ok(p)
 }
 
+/// Whether `path` is a device, pipe or socket: neither a regular file nor a directory.
+fn special(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
 /// A temporary file beside `path`, with `path`'s extension (some writers choose the format by
-/// it).
+/// it); in the system's temporary directory when `path` is a device, pipe or socket (beside
+/// `/dev/null` is `/dev`).
 pub fn temp_beside(path: &Path) -> io::Result<tempfile::NamedTempFile> {
     let suffix = path
         .extension()
         .map(|e| format!(".{}", e.to_string_lossy()))
         .unwrap_or_default();
+    let dir = if special(path) {
+        std::env::temp_dir()
+    } else {
+        parent_created(path)?.to_path_buf()
+    };
     tempfile::Builder::new()
         .prefix(TMP_PREFIX)
         .suffix(&suffix)
-        .tempfile_in(parent_created(path)?)
+        .tempfile_in(dir)
 }
 
-/// Moves a complete temporary file over `path` (after syncing it).
+/// Moves a complete temporary file over `path` (after syncing it); into `path` when it is a
+/// device, pipe or socket, whose node stays.
 pub fn persist(tmp: tempfile::NamedTempFile, path: &Path) -> io::Result<()> {
+    if special(path) {
+        let mut out = std::fs::OpenOptions::new().write(true).open(path)?;
+        io::copy(&mut tmp.reopen()?, &mut out)?;
+        return Ok(());
+    }
     tmp.as_file().sync_all()?;
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
@@ -150,6 +169,40 @@ mod tests {
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
         assert_eq!(names.len(), 2, "{names:?}");
+    }
+
+    /// `-o /dev/null` or a FIFO: the bytes go into the node, which stays what it was (a file
+    /// renamed over `/dev/null` had replaced the device for every process on the machine).
+    #[test]
+    fn a_pipe_is_written_into_not_replaced() {
+        use std::io::Read;
+        use std::os::unix::fs::FileTypeExt;
+        let base = tempfile::tempdir().unwrap();
+        let fifo = base.path().join("out.blob");
+        rustix::fs::mknodat(
+            rustix::fs::CWD,
+            &fifo,
+            rustix::fs::FileType::Fifo,
+            rustix::fs::Mode::from_raw_mode(0o600),
+            0,
+        )
+        .unwrap();
+        for bytes in [&b"first"[..], &b"second"[..]] {
+            let reader = {
+                let fifo = fifo.clone();
+                std::thread::spawn(move || {
+                    let mut got = Vec::new();
+                    File::open(fifo).unwrap().read_to_end(&mut got).unwrap();
+                    got
+                })
+            };
+            write(&fifo, bytes).unwrap();
+            // Before the join: a reader of a replaced node would wait for ever.
+            assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+            assert_eq!(reader.join().unwrap(), bytes);
+        }
+        // Nothing temporary was left beside it.
+        assert_eq!(std::fs::read_dir(base.path()).unwrap().count(), 1);
     }
 
     #[test]
