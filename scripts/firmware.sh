@@ -2,7 +2,8 @@
 # The cell-controller firmware (runtime/firmware: thumbv7em-none-eabihf, Cortex-M7) under QEMU
 # mps2-an500. Installs what it needs when missing (Debian's Rust toolchain with std sources,
 # its clippy, qemu-system-arm, binutils-arm-none-eabi for the linker, gcc-arm-none-eabi and
-# libstdc++-arm-none-eabi-newlib for Ruckig's C++ core in the output stage).
+# libstdc++-arm-none-eabi-newlib for Ruckig's C++ core in the output stage), and upgrades a
+# rustc-web older than the workspace's rust-version (scripts/debian-rust.sh).
 #
 #   scripts/firmware.sh build                       build; prints the ELF's path
 #   scripts/firmware.sh run CELL.BLOB TASK.BIN [--stream FILE] [--figures FILE]
@@ -30,6 +31,8 @@ caller=$PWD
 abs() { case $1 in /*) echo "$1" ;; *) echo "$caller/$1" ;; esac; }
 cd "$(dirname "$0")/.."
 usage() { awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0" >&2; exit 2; }
+# shellcheck source=scripts/debian-rust.sh
+. scripts/debian-rust.sh
 
 install_missing() {
   local need=()
@@ -43,6 +46,7 @@ install_missing() {
     $SUDO apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need[@]}" >/dev/null
   fi
+  rust_new_enough
 }
 
 # Debian's toolchain (rustup cannot add targets here) with -Zbuild-std (.cargo/config.toml).

@@ -22,6 +22,9 @@ if [ ${#missing[@]} -gt 0 ]; then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
+# shellcheck source=scripts/debian-rust.sh
+. scripts/debian-rust.sh
+rust_new_enough
 
 step "cargo fmt --check"
 cargo fmt --all -- --check
