@@ -154,6 +154,22 @@ impl ArmMeter {
 
     /// The ratios of the next sample `q`, whose differences are `d`.
     fn rate_next(&self, q: &[f64; NA], d: &Differences) -> LimitRatios {
+        let rate = |x: &[f64; NA], of: &[f64; NA], inv: &[f64; NA]| {
+            peak(&core::array::from_fn(|j| f64::abs(x[j] - of[j]) * inv[j]))
+        };
+        const ZERO: [f64; NA] = [0.0; NA];
+        LimitRatios {
+            position: rate(q, &self.middle, &self.inv_range),
+            speed: rate(&d.v, &ZERO, &self.inv_speed),
+            acceleration: rate(&d.a, &ZERO, &self.inv_acceleration),
+            jerk: rate(&d.jerk, &ZERO, &self.inv_jerk),
+        }
+    }
+
+    /// [`ArmMeter::rate_next`] as a fold of [`nan_max`] over the joints from zero: the previous
+    /// implementation, kept as the tests' reference.
+    #[cfg(test)]
+    fn rate_next_folded(&self, q: &[f64; NA], d: &Differences) -> LimitRatios {
         let mut r = LimitRatios::default();
         for j in 0..NA {
             r.position = nan_max(
@@ -243,6 +259,19 @@ impl ArmMeter {
     /// The last sample.
     pub fn last(&self) -> &[f64; NA] {
         &self.q
+    }
+}
+
+/// The largest of `x` and 0, NaN if any of `x` is (a NaN sample must not rate as within
+/// limits): the [`nan_max`] fold from 0, as independent maxima and one NaN test instead of
+/// a chain of branches.
+#[inline(always)]
+fn peak(x: &[f64; NA]) -> f64 {
+    let m = x.iter().fold(0.0, |m, &v| if v > m { v } else { m });
+    if x.iter().fold(false, |nan, v| nan | v.is_nan()) {
+        f64::NAN
+    } else {
+        m
     }
 }
 
@@ -349,5 +378,44 @@ mod tests {
         q[3] = f64::NAN;
         m.push(&q);
         assert!(!m.ratios().within());
+    }
+
+    /// The ratios of a sample are those of the `nan_max` fold, bit for bit (NaN where it
+    /// gives NaN), on samples and differences that mix zeros of both signs, infinities, NaN
+    /// and values of every size.
+    #[test]
+    fn the_rating_is_the_folds_bit_for_bit() {
+        use rand::{RngExt, SeedableRng, rngs::StdRng};
+        let mut rng = StdRng::seed_from_u64(20);
+        let specials = [
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            1e-300,
+        ];
+        let value = |rng: &mut StdRng| match rng.random_range(0..10) {
+            0 => specials[rng.random_range(0..specials.len())],
+            _ => rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-8..8)),
+        };
+        let bits = |r: LimitRatios| {
+            [r.position, r.speed, r.acceleration, r.jerk]
+                .map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() })
+        };
+        for _ in 0..200_000 {
+            let m = ArmMeter::at_rest(&limits(), 1e-3, &core::array::from_fn(|_| value(&mut rng)));
+            let q = core::array::from_fn(|_| value(&mut rng));
+            let d = Differences {
+                v: core::array::from_fn(|_| value(&mut rng)),
+                a: core::array::from_fn(|_| value(&mut rng)),
+                jerk: core::array::from_fn(|_| value(&mut rng)),
+            };
+            assert_eq!(
+                bits(m.rate_next(&q, &d)),
+                bits(m.rate_next_folded(&q, &d)),
+                "{q:?} {d:?}"
+            );
+        }
     }
 }
