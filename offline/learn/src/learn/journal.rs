@@ -60,7 +60,7 @@ impl Learner {
     /// for every location type they swept whose queue [`Learner::knowledge`] has since
     /// emptied, the field and splat of that build; a type still queued is rebuilt after
     /// loading, as it would be here. Of a lesson's swept spheres whose type was rebuilt it
-    /// holds those new to the sweep ([`Grown`]): replayed, they grow it as the whole path did.
+    /// holds those new to the sweep (`Grown`): replayed, they grow it as the whole path did.
     pub fn addition(&self, lessons: &[Lessons]) -> AdditionRecord {
         let mut touched: Vec<usize> = lessons.iter().flat_map(Lessons::swept_types).collect();
         touched.sort_unstable();
