@@ -233,17 +233,32 @@ fn a_sweep_is_read_only_when_its_type_is_rebuilt() {
 }
 
 /// A program's fingerprint is the blob's CRC-32 (`prf_shared::blob::crc32`, table-driven) of
-/// every sample's t, gripper, base and arm values in little-endian f64, in order.
+/// its task — the part, the from and the to location, each its id and type (a u32 LE length,
+/// then the bytes) and pose, then the goal — and every sample's t, gripper, base and arm
+/// values, the numbers in little-endian f64, in order; neither the id nor the note counts.
 #[test]
-fn a_fingerprint_is_the_crc_of_the_trajectory() {
+fn a_fingerprint_is_the_crc_of_the_task_and_trajectory() {
     for d in &dataset().demonstrations {
-        let bytes: Vec<u8> = d
-            .samples
-            .iter()
-            .flat_map(|s| [s.t, s.gripper].into_iter().chain(s.base).chain(s.arm))
-            .flat_map(f64::to_le_bytes)
-            .collect();
+        let mut bytes = Vec::new();
+        for p in [&d.task.part, &d.task.from, &d.task.to] {
+            for text in [&p.id, &p.kind] {
+                bytes.extend((text.len() as u32).to_le_bytes());
+                bytes.extend(text.as_bytes());
+            }
+            bytes.extend(p.pose.iter().flat_map(|v| v.to_le_bytes()));
+        }
+        bytes.extend(d.task.goal.iter().flat_map(|v| v.to_le_bytes()));
+        bytes.extend(
+            d.samples
+                .iter()
+                .flat_map(|s| [s.t, s.gripper].into_iter().chain(s.base).chain(s.arm))
+                .flat_map(f64::to_le_bytes),
+        );
         assert_eq!(fingerprint(d), prf_shared::blob::crc32(&bytes), "{}", d.id);
+        let mut renamed = d.clone();
+        renamed.id = "d999".into();
+        renamed.task.note = Some("the same program again".into());
+        assert_eq!(fingerprint(&renamed), fingerprint(d), "{}", d.id);
     }
 }
 
@@ -260,6 +275,13 @@ fn unfit_datasets_and_bad_files_are_refused_with_a_reason() {
         matches!(&e, LearnError::AlreadyAdded { id, as_id } if id == "d999" && as_id == "d001"),
         "{e}"
     );
+    // The same trajectory for the other part is another program (prf gen's Part1 and Part2
+    // programs between the same locations move alike): it teaches that part's grasp.
+    let mut other_part = again.clone();
+    let task = &mut other_part.demonstrations[0].task;
+    let other = ds.parts.iter().find(|p| p.id != task.part.id).unwrap();
+    (task.part.id, task.part.kind) = (other.id.clone(), other.kind.clone());
+    assert!(l.admits(&other_part).is_ok());
     // Programs that kept less clearance than the workspaces were dilated for.
     let mut closer = part(ds, 2..3);
     closer.clearance_demo = Some(0.04);

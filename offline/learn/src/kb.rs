@@ -34,8 +34,9 @@ use std::sync::Arc;
 pub const MAGIC: [u8; 6] = *b"PRF-KB";
 /// The layout this build writes and reads (2: the swept spheres, their keys and the splat as
 /// byte strings of `Record`s; 3: additions may follow the base; 4: each location type's sweep
-/// in a section of its own, after the core).
-pub const VERSION: u32 = 4;
+/// in a section of its own, after the core; 5: a program's fingerprint covers its task, not
+/// only its trajectory, [`crate::learn::fingerprint`]).
+pub const VERSION: u32 = 5;
 /// Magic, version, base length, core length, core CRC-32.
 pub const HEADER: usize = 6 + 4 + 8 + 8 + 4;
 /// A sweep section's or an addition's length (u64 LE) and CRC-32 (u32 LE).

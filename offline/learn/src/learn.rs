@@ -176,7 +176,7 @@ pub enum LearnError {
     )]
     ClearanceBelowKb { stated: f64, kb: f64 },
     #[error(
-        "demonstration {id} is already in the knowledge base (as {as_id}: the same trajectory); adding it twice would count its affordances twice"
+        "demonstration {id} is already in the knowledge base (as {as_id}: the same task and trajectory); adding it twice would count its affordances twice"
     )]
     AlreadyAdded { id: String, as_id: String },
     #[error("demonstration {demonstration}: part type {kind} is not among the dataset's parts")]
@@ -1231,11 +1231,28 @@ fn within_100_m(c: &[f64; 3]) -> bool {
     (c[0].abs() <= 100.0) & (c[1].abs() <= 100.0) & (c[2].abs() <= 100.0)
 }
 
-/// CRC-32 of a demonstration's trajectory (every sample's bits): the same program has the
-/// same fingerprint whatever its id.
+/// CRC-32 of a demonstration's program: its task (the part, the two locations — id, type
+/// and pose each — and the goal) and its trajectory (every sample's bits). The same program
+/// has the same fingerprint whatever its id or note; the same trajectory for another part
+/// or location is another program (it teaches that part's grasps, that location's stances).
 pub fn fingerprint(d: &Demonstration) -> u32 {
-    // The blob's CRC-32 by carry-less multiplication ([`crate::kb`]), a sample at a time.
+    // The blob's CRC-32 by carry-less multiplication ([`crate::kb`]): the task's strings
+    // after their lengths (u32 LE), then every f64 in little-endian, the samples one at a time.
     let mut digest = crc32fast::Hasher::new();
+    let task = &d.task;
+    for placed in [&task.part, &task.from, &task.to] {
+        for text in [&placed.id, &placed.kind] {
+            digest.update(&(text.len() as u32).to_le_bytes());
+            digest.update(text.as_bytes());
+        }
+        placed
+            .pose
+            .iter()
+            .for_each(|v| digest.update(&v.to_le_bytes()));
+    }
+    task.goal
+        .iter()
+        .for_each(|v| digest.update(&v.to_le_bytes()));
     let mut bytes = [0u8; 8 * (2 + 3 + NA)];
     for s in &d.samples {
         let values = [s.t, s.gripper].into_iter().chain(s.base).chain(s.arm);

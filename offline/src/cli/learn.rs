@@ -167,7 +167,7 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
     for (i, d) in demos.iter().enumerate() {
         if let Some(j) = prints[..i].iter().position(|p| *p == prints[i]) {
             anyhow::bail!(
-                "demonstration {} is given twice (also as {}: the same trajectory)",
+                "demonstration {} is given twice (also as {}: the same task and trajectory)",
                 d.id,
                 demos[j].id
             );
