@@ -6,8 +6,8 @@ mod synthetic;
 
 use clap::{Parser, Subcommand};
 use cli::{
-    check_dataset, demo, envelope, experiment, export_mcap, firmware, generate, import_bag,
-    inspect, learn, plan, rdmp_demo, run, view,
+    check_dataset, demo, envelope, experiment, export_mcap, field_error, firmware, generate,
+    import_bag, inspect, learn, plan, rdmp_demo, run, view,
 };
 
 #[global_allocator]
@@ -60,6 +60,9 @@ enum Command {
     /// The part-pose envelope of a task: which offsets of the part's nominal pose (x, y, yaw)
     /// at one of its location types still plan at risk 0 with the blob (table, CSV, SVG).
     Envelope(envelope::Args),
+    /// How far each learned Ω+ field lies above the exact Ω+ (every dilated demonstrated
+    /// ball) near its boundary, and which part of the representation the millimetres come from.
+    FieldError(field_error::Args),
     /// The paper's evaluation on the example cell: `rdmp-vs-dmp` (Sec. 4.3, Fig. 3–4) and
     /// `monte-carlo` (Sec. 6.3, Fig. 5), as tables, CSV and charts (SVG + PNG).
     Experiment(experiment::Args),
@@ -102,6 +105,7 @@ fn main() -> anyhow::Result<()> {
         Some(Command::Plan(args)) => plan::run(&args),
         Some(Command::Envelope(args)) => envelope::run(&args),
         Some(Command::Experiment(args)) => experiment::run(&args),
+        Some(Command::FieldError(args)) => field_error::run(&args),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::BenchCell(args)) => bench::cell::run(&args),
         Some(Command::Firmware(args)) => firmware::run(&args),
@@ -128,6 +132,7 @@ impl Command {
                 | Command::Plan(_)
                 | Command::Envelope(_)
                 | Command::Experiment(_)
+                | Command::FieldError(_)
         )
     }
 }

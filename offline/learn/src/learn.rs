@@ -805,6 +805,18 @@ impl Learner {
         &self.robot
     }
 
+    /// The sweep of location type `t` (its demonstrated spheres and feature balls) once its
+    /// field is built, None while it is still in the knowledge-base file or `t` is past the
+    /// types.
+    pub fn sweep(&self, t: usize) -> Option<&Sweep> {
+        self.sweeps.get(t).and_then(Slot::ready)
+    }
+
+    /// The location types' names, in type order.
+    pub fn location_kinds(&self) -> &[String] {
+        &self.location_kinds
+    }
+
     /// Whether `ds`'s demonstrations may be added: the same cell (location and part types),
     /// a stated r_d at least the one learned with (programs that kept less clearance would
     /// make ε unsafe), and no program already added (by [`fingerprint`]: ids repeat across

@@ -124,6 +124,12 @@ impl Sweep {
         }
     }
 
+    /// The feature balls' spheres (centre, r_j), thinned to the feature spacing: the balls
+    /// the field's nodes choose from once dilated by ε.
+    pub fn features(&self) -> &[(Vector3<f64>, f64)] {
+        &self.features
+    }
+
     /// Adds the spheres of a configuration path (`arm` joint samples, arm base at
     /// `arm_base` in the location frame), re-sampled so no centre moves more than `step`.
     pub fn add_path(&mut self, model: &RobotModel, arm_base: &Pose, arm: &[[f64; 7]], step: f64) {

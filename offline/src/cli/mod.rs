@@ -9,6 +9,7 @@ pub mod demo;
 pub mod envelope;
 pub mod experiment;
 pub mod export_mcap;
+pub mod field_error;
 pub mod firmware;
 pub mod generate;
 pub mod import_bag;
