@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The project's test command (README, "Test"): installs what it needs, then runs every check
+# The project's test command (README, "Two commands"): installs what it needs, then runs every check
 # CI runs. Usage: scripts/test.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -75,6 +75,13 @@ cargo run --locked -q -p prf-offline --bin prf -- plan "$smoke/cell.blob" --part
 step "CLI smoke run: prf envelope (the nominal part pose and 10 mm around it, one yaw)"
 cargo run --locked -q -p prf-offline --bin prf -- envelope "$smoke/cell.blob" --part Part1 --from CNC1 \
   --to Table1 --range-mm 10 --step-mm 10 --yaw-deg 0 --budget-steps 20000 -o "$smoke/envelope" | tail -n 1
+
+step "CLI smoke run: prf view, prf export-mcap and prf field-error (the tour's viewers and the field against the exact Ω+)"
+cargo run --locked -q -p prf-offline --bin prf -- view "$smoke/cell.blob" --part Part1 --from CNC1 \
+  --to Table1 -o "$smoke/view" | tail -n 1
+cargo run --locked -q -p prf-offline --bin prf -- export-mcap --blob "$smoke/cell.blob" \
+  -o "$smoke/knowledge.mcap" | tail -n 1
+cargo run --locked -q -p prf-offline --bin prf -- field-error "$smoke" --points 200 | tail -n 4
 
 step "fuzzing, short: every target 10 s from the committed seeds (scripts/fuzz.sh all 10; installs cargo-fuzz)"
 scripts/fuzz.sh all 10

@@ -979,7 +979,7 @@ fn assert_recovered(r: &serde_json::Value, sp: &[SetpointMsg], js: &[JointStateM
 
 /// The stop between two sessions (the first's last setpoint to the arm at rest, within the
 /// joint, speed and acceleration limits) and the recovery session's retraction (to its first
-/// setpoint on q_a,H), printed as the README's row: stop time and largest joint travel, then
+/// setpoint on q_a,H), printed as one row: stop time and largest joint travel, then
 /// the retraction's time.
 fn stop_and_retraction(sp: &[SetpointMsg], js: &[JointStateMsg], second: usize) {
     let model = RobotModel::kmr_iiwa14();

@@ -16,6 +16,38 @@
 //! - [`figures`]: the firmware's measured figures as one record for the host;
 //! - [`ideal`]: an ideal cell (exact arm, fixed-rate gripper and platform) to run programs
 //!   against without hardware.
+//!
+//! # Example
+//!
+//! Load a blob, plan the task of a task block, and execute the program on the ideal cell (a
+//! controller does the same from flash, with its own clock and plant):
+//!
+//! ```
+//! use embassy_time::{Duration, Instant};
+//! use prf_runtime::{Executor, ExecutorConfig, Runtime, ideal::IdealCell, plan, reverse::Reversal};
+//!
+//! let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../fuzz");
+//! let blob = std::fs::read(format!("{dir}/data/smoke.blob")).unwrap(); // `prf learn` writes it
+//! let block = std::fs::read(format!("{dir}/seeds/task_block/task-00.bin")).unwrap(); // `prf plan --task-block`
+//! let rt = Runtime::load(&blob).expect("a valid blob");
+//! let task = prf_runtime::task_block::decode(&block).expect("a valid task block");
+//! let p = plan(&rt, &task).expect("a symbolically feasible task");
+//! assert!(p.skills.feasible, "J* = {} m", p.skills.j);
+//!
+//! let mut reversal = Box::new(Reversal::new()); // static memory on a controller
+//! let program = p.program.expect("a program");
+//! let mut ex = Executor::new(&rt, program, &task.home, ExecutorConfig::default(), &mut reversal);
+//! let mut cell = IdealCell::new(rt.model.home, &task.home, rt.config.rdmp.dt);
+//! let mut now = Instant::from_ticks(0);
+//! loop {
+//!     let sp = ex.step(now, &mut cell).expect("the ideal cell never fails");
+//!     if sp.is_final() {
+//!         break;
+//!     }
+//!     now += Duration::from_millis(1); // one tick: 1 kHz
+//! }
+//! assert!(ex.done() && ex.fault().is_none());
+//! ```
 #![no_std]
 
 pub mod executor;

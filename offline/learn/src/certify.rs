@@ -289,8 +289,7 @@ impl<'a> Decide<'a> {
     /// Calls `visit` with each cell (index) the margin ball of `s` touches: those of its box's
     /// corners (per axis the cell of the lowest and of the highest corner, and every cell
     /// between), at most 8. A visitor, not a returned array of them: returned, the array went
-    /// through the stack and its reads waited on its writes (see the README's knowledge-base
-    /// figures).
+    /// through the stack and its reads waited on its writes.
     #[inline]
     fn cells_touched(&self, s: &SphereSample, mut visit: impl FnMut(usize)) {
         let m = Vector3::repeat(self.cfg.certify_margin);

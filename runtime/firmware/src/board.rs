@@ -1,6 +1,6 @@
 //! The board: QEMU `mps2-an500` (Cortex-M7 with the double-precision FPU). Adapting to a real
 //! cell controller: set [`SYSTICK_HZ`] to its core clock (SysTick runs on it) and the regions
-//! in the top-level `memory.x` (see the README).
+//! in the top-level `memory.x` (see docs/firmware.md).
 
 /// SysTick clock, Hz: the core clock. mps2-an500 runs at 25 MHz.
 pub const SYSTICK_HZ: u32 = 25_000_000;
