@@ -1,9 +1,16 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and writes docs/benchmarks.md (or the file given): the machine, the date,
 # the commit, and per benchmark its command and what it printed. The file is generated; do not
-# edit it by hand. Usage: scripts/bench-report.sh [OUT.md]   (about 4 minutes on 2 cores)
+# edit it by hand. Usage: scripts/bench-report.sh [--full] [OUT.md]
+# About 4 minutes on 2 cores; --full runs every task of the example cell on the firmware (one
+# task otherwise: Part1 CNC1 → Table1), about 10 minutes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+firmware_tasks=(--part Part1 --from CNC1 --to Table1)
+if [ "${1:-}" = --full ]; then
+  firmware_tasks=()
+  shift
+fi
 out=${1:-docs/benchmarks.md}
 work=target/bench-report
 mkdir -p "$work"
@@ -43,10 +50,18 @@ section "Host cell" \
   "setpoint latency (iceoryx2 against a Unix socket), the 1 kHz loop's lateness and misses beside a probe thread's, Ruckig per update" \
   "$prf" bench-cell "$work/cell.blob" --messages 1000 --loop-seconds 10
 section "Cell-controller firmware (Cortex-M7 under QEMU, instructions)" \
-  "every task of the example cell: executor tick, planning, RAM, and the stream against the host's" \
-  "$prf" firmware "$work/cell.blob"
+  "executor tick, planning, RAM, and the stream against the host's, for one task (\`scripts/bench-report.sh --full\`: every task of the example cell)" \
+  "$prf" firmware "$work/cell.blob" "${firmware_tasks[@]}"
+section "Part-pose envelope, pick side" \
+  "which offsets of the part's nominal pose at the CNCs plan Part1 CNC1 → Table1 at risk 0" \
+  "$prf" envelope "$work/cell.blob" --part Part1 --from CNC1 --to Table1 --at from \
+  --range-mm 10 --step-mm 5 --yaw-deg=-5,-2.5,0,2.5,5 -o "$work/envelope-from"
+section "Part-pose envelope, place side" \
+  "the same at the Tables" \
+  "$prf" envelope "$work/cell.blob" --part Part1 --from CNC1 --to Table1 --at to \
+  --range-mm 10 --step-mm 5 --yaw-deg=-5,-2.5,0,2.5,5 -o "$work/envelope-to"
 section "Learned workspaces against the exact Ω+" \
-  "how far the conservative field lies above the exact signed distance near the boundary" \
+  "how far the conservative field lies above the exact signed distance near the boundary, and the risk term of demonstrated spheres moved by up to 10 mm" \
   "$prf" field-error "$work/ds" --points 1000
 
 {

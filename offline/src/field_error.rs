@@ -12,6 +12,12 @@
 //! field − features is the cost of the grid (one ball per node, 8 nodes per lookup) and of
 //! quantization (certificates can make it negative); features − exact is the cost of
 //! thinning. field − exact below 0 would mean the field is not conservative.
+//!
+//! What decides a risk, though, is the field at a robot sphere's centre, where sdf + r_j is
+//! compared with 0 (Eq. 16), r_j deep inside Ω+. So a second set of points are demonstrated
+//! spheres moved by up to a few millimetres, as a part placed off its demonstrated pose moves
+//! them: per point the sphere's risk term sdf + r_j by the field and by the exact Ω+, and
+//! whether each certifies it (≤ 0).
 
 use prf_learn::Knowledge;
 use prf_learn::exact::BallUnion;
@@ -71,6 +77,8 @@ pub struct TypeError {
     pub balls: (usize, usize),
     /// The points, each within ε + [`BAND_BEYOND_EPSILON`] of the boundary.
     pub samples: Vec<Sample>,
+    /// Demonstrated spheres moved: (field, exact) risk terms sdf + r_j, m.
+    pub moved: Vec<(f64, f64)>,
 }
 
 impl TypeError {
@@ -89,6 +97,14 @@ impl TypeError {
         Spread::of(self.samples.iter().map(|s| s.features - s.exact).collect())
     }
 
+    /// Of the moved spheres the exact Ω+ certifies (risk term ≤ 0), the share the field
+    /// certifies too, and how many the exact Ω+ certifies.
+    pub fn moved_certified(&self) -> (f64, usize) {
+        let exact: Vec<&(f64, f64)> = self.moved.iter().filter(|m| m.1 <= 0.0).collect();
+        let field = exact.iter().filter(|m| m.0 <= 0.0).count();
+        (field as f64 / exact.len().max(1) as f64, exact.len())
+    }
+
     /// Share of the points where the field is within `tol` of the exact distance.
     pub fn within(&self, tol: f64) -> f64 {
         let n = self.samples.len().max(1) as f64;
@@ -100,12 +116,29 @@ impl TypeError {
     }
 }
 
+/// A random unit vector.
+fn direction(rng: &mut StdRng) -> nalgebra::Vector3<f64> {
+    loop {
+        let v = nalgebra::Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let n = v.norm();
+        if n > 1e-3 && n <= 1.0 {
+            return v / n;
+        }
+    }
+}
+
 /// Measures every location type of `knowledge` (what `learner` learned) that has a field:
-/// `points` random points per type near the boundary of its Ω+ (seeded).
+/// `points` random points per type near the boundary of its Ω+, and `points` demonstrated
+/// spheres each moved by a random vector of length up to `moved_by`, m (seeded).
 pub fn measure(
     learner: &Learner,
     knowledge: &Knowledge,
     points: usize,
+    moved_by: f64,
     seed: u64,
 ) -> Vec<TypeError> {
     let epsilon = knowledge.config.workspace.epsilon;
@@ -125,17 +158,7 @@ pub fn measure(
         while samples.len() < points && tries < 100 * points {
             tries += 1;
             let s = sweep.spheres.get(rng.random_range(0..sweep.spheres.len()));
-            let u = loop {
-                let v = nalgebra::Vector3::new(
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                );
-                let n = v.norm();
-                if n > 1e-3 && n <= 1.0 {
-                    break v / n;
-                }
-            };
+            let u = direction(&mut rng);
             let x = s.centre + u * (s.radius + epsilon + rng.random_range(-band..band));
             let e = exact.distance(&x);
             if e.abs() > band {
@@ -147,10 +170,20 @@ pub fn measure(
                 exact: e,
             });
         }
+        let moved = (0..points)
+            .map(|_| {
+                let s = sweep.spheres.get(rng.random_range(0..sweep.spheres.len()));
+                // Uniform in the ball of radius `moved_by`.
+                let x = s.centre
+                    + direction(&mut rng) * moved_by * rng.random_range(0.0..=1.0f64).cbrt();
+                (field.distance(&x) + s.radius, exact.distance(&x) + s.radius)
+            })
+            .collect();
         out.push(TypeError {
             name: name.clone(),
             balls: (exact.len(), features.len()),
             samples,
+            moved,
         });
     }
     out

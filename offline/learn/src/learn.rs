@@ -577,6 +577,7 @@ impl Learner {
                 demo: clearance_demo,
             });
         }
+        config.workspace.certify_margin = config.workspace.margin_for(config.workspace.epsilon);
         let location_kinds = location_kinds(ds);
         let part_kinds = part_kinds(ds);
         Ok(Learner {

@@ -13,9 +13,10 @@
 //!    ([`crate::edt`]) to the nearest node inside Ω+, an upper bound of their distance.
 //! 4. **Encoding**: bricks far outside become uniform; feature balls are quantized
 //!    conservatively (offset rounded, radius shrunk by the rounding error).
-//! 5. **Certificates** ([`crate::certify`]): every demonstrated sphere that the encoded field
-//!    does not certify with margin [`WorkspaceConfig::certify_margin`] gets its own ball as a
-//!    certificate in the cells around it, so every demonstrated configuration has risk 0.
+//! 5. **Certificates** ([`crate::certify`]): the demonstrated spheres that the encoded field
+//!    does not certify with margin [`WorkspaceConfig::certify_margin`] are certified by
+//!    demonstrated balls added to the cells around them (a greedy cover), so every
+//!    demonstrated configuration, and every one within the margin of it, has risk 0.
 
 use crate::certify::{self, Certified};
 use crate::edt;
@@ -49,7 +50,9 @@ pub struct WorkspaceConfig {
     pub reach: f64,
     /// Bricks whose nodes are all at least this far outside Ω+ are stored as one value, m.
     pub far: f64,
-    /// Demonstrated spheres must be certified with this margin (sdf + r ≤ −margin), m.
+    /// Demonstrated spheres must be certified with this margin (sdf + r ≤ −margin), m: a new
+    /// program whose every sphere lies within it of a demonstrated position of the same
+    /// robot sphere rates risk 0. Learning caps it ([`WorkspaceConfig::margin_for`]).
     pub certify_margin: f64,
 }
 
@@ -57,15 +60,35 @@ impl Default for WorkspaceConfig {
     fn default() -> Self {
         WorkspaceConfig {
             epsilon: 0.02,
-            voxel: 0.05,
+            voxel: 0.1,
             resample: 0.002,
             feature_spacing: 0.01,
             reach: 0.08,
-            far: 0.08,
-            certify_margin: 0.001,
+            far: 0.16,
+            certify_margin: REUSE_MARGIN,
         }
     }
 }
+
+impl WorkspaceConfig {
+    /// The certification margin learning uses with dilation ε: [`Self::certify_margin`], at
+    /// most what a demonstrated sphere's own certificate ball leaves (ε less its mm rounding,
+    /// [`ROUNDING`]) and at least 1 mm.
+    pub fn margin_for(&self, epsilon: f64) -> f64 {
+        self.certify_margin.min(epsilon - ROUNDING).max(0.001)
+    }
+}
+
+/// The default certification margin, m: every demonstrated sphere is certified for centres
+/// within 8 mm of where it was, so a part placed some millimetres off still plans at risk 0.
+/// It sizes the blob: at 8 mm the example cell's workspaces take about twice what 1 mm
+/// takes (see docs/benchmarks.md).
+pub const REUSE_MARGIN: f64 = 0.01;
+
+/// What a sphere's own certificate ball can lose to its mm rounding at the sphere's centre, m:
+/// the centre's rounding (up to √3/2 mm) twice (the centre moves, and the radius shrinks by
+/// as much) and the radius rounded down (1 mm), rounded up.
+pub const ROUNDING: f64 = 0.003;
 
 /// A robot sphere at a demonstrated configuration, in the location frame: centre and radius
 /// r_j (the ball of Ω+ around it has radius r_j + ε).
@@ -1331,6 +1354,16 @@ mod tests {
             let packed = matches!(from_raw, PathKeys::Packed(..));
             assert_eq!(packed, n > 0 && reach <= 7_000, "case {case}");
         }
+    }
+
+    /// The margin learning uses: the setting, capped where ε leaves a sphere's own
+    /// certificate ball less room, and at least 1 mm.
+    #[test]
+    fn the_margin_is_capped_by_epsilon() {
+        let cfg = WorkspaceConfig::default();
+        assert_eq!(cfg.margin_for(0.02), REUSE_MARGIN);
+        assert!((cfg.margin_for(0.008) - 0.005).abs() < 1e-15);
+        assert_eq!(cfg.margin_for(0.0), 0.001);
     }
 
     /// Leaving out a sphere that repeats its robot sphere's last key (`SweptPath::of`)

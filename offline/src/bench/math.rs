@@ -353,7 +353,7 @@ pub fn run(args: &Args) -> Result<()> {
     });
     report("whole integration, 2000 steps", &whole, "µs");
     println!(
-        "  → {:.2}% of a 1 ms tick per step; goal ≤ 400 ns per step (issue 20): {}",
+        "  → {:.2}% of a 1 ms tick per step; goal ≤ 400 ns per step: {}",
         step.median / 1e4,
         if step.median <= 400.0 {
             "met"

@@ -9,8 +9,10 @@ use plotters::prelude::*;
 use prf_offline::envelope::{Cell, Grid, Outcome, map, safe_square};
 use prf_offline::plots::{self, Chart};
 use prf_runtime::skill_plan::PlanBudget;
+use prf_sim::tasks::{FloorTask, world_tasks};
+use prf_sim::world::World;
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The end of the task whose part pose moves.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -19,6 +21,16 @@ pub enum End {
     From,
     /// Where it is put down (--to).
     To,
+}
+
+impl End {
+    /// "pick" or "place".
+    fn side(self) -> &'static str {
+        match self {
+            End::From => "pick",
+            End::To => "place",
+        }
+    }
 }
 
 #[derive(clap::Args, Debug)]
@@ -54,9 +66,21 @@ pub struct Args {
     /// fail or miss their goal before one reaches it).
     #[arg(long, default_value_t = 2_000_000)]
     pub budget_steps: u64,
-    /// Output directory (envelope.csv, envelope.svg, envelope.png).
+    /// Output directory (envelope.csv, envelope.svg, envelope.png; with --all one of each
+    /// per task and side, named after them, and summary.csv).
     #[arg(short, long, default_value = "target/prf-envelope")]
     pub out: PathBuf,
+    /// Every task of the cell, the pick and the place side each (instead of one task and
+    /// --at): a table of the safe squares per task, side and yaw.
+    #[arg(long, conflicts_with_all = ["part", "from", "to", "at"])]
+    pub all: bool,
+}
+
+/// What one task and side came to: per yaw the safe offsets, all offsets and the safe square.
+struct Summary {
+    task: String,
+    side: String,
+    yaws: Vec<(usize, usize, Option<f64>)>,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
@@ -68,18 +92,64 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         );
     }
     let world = a.world.load()?;
-    let ft = a.task.required(&world)?;
     let bytes = read_blob(&a.blob)?;
     // Fails with the file's name on a corrupt blob.
     runtime(&bytes, &a.blob, Default::default())?;
-    let (location, kind) = match a.at {
-        End::From => &ft.from,
-        End::To => &ft.to,
-    };
     let grid = Grid {
         range: a.range_mm * 1e-3,
         step: a.step_mm * 1e-3,
         yaws: a.yaw_deg.iter().map(|d| d.to_radians()).collect(),
+    };
+    if !a.all {
+        let ft = a.task.required(&world)?;
+        envelope(a, &world, &bytes, &ft, a.at, &grid, &a.out.join("envelope"))?;
+        return Ok(());
+    }
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let mut summaries = Vec::new();
+    for ft in world_tasks(&world) {
+        for end in [End::From, End::To] {
+            let name = format!(
+                "envelope-{}-{}-{}-{}",
+                ft.part.0,
+                ft.from.0,
+                ft.to.0,
+                end.side()
+            );
+            summaries.push(envelope(
+                a,
+                &world,
+                &bytes,
+                &ft,
+                end,
+                &grid,
+                &a.out.join(name),
+            )?);
+            println!();
+        }
+    }
+    print_summary(&summaries, &grid);
+    let csv = a.out.join("summary.csv");
+    prf_files::atomic::write(&csv, summary_csv(&summaries, &grid))
+        .with_context(|| format!("writing {}", csv.display()))?;
+    println!("wrote {}", csv.display());
+    Ok(())
+}
+
+/// Maps task `ft` with the part moved at `end` over `grid`: the tables, `<stem>.csv` and the
+/// map `<stem>.svg`/`.png`.
+fn envelope(
+    a: &Args,
+    world: &World,
+    bytes: &[u8],
+    ft: &FloorTask,
+    end: End,
+    grid: &Grid,
+    stem: &Path,
+) -> anyhow::Result<Summary> {
+    let (location, kind) = match end {
+        End::From => &ft.from,
+        End::To => &ft.to,
     };
     let n = grid.offsets().len().pow(2) * grid.yaws.len();
     println!(
@@ -93,20 +163,22 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let bar = Bar::new("planning", "offsets", false);
     bar.report(prf_files::Progress::Total(n as u64));
     let cells = map(
-        &bytes,
-        &world,
+        bytes,
+        world,
         kind,
         (&ft.part.0, &ft.from.0, &ft.to.0),
-        &grid,
+        grid,
         PlanBudget {
             steps: a.budget_steps,
         },
         &|| bar.inc(),
     )?;
     bar.finish();
-    print_tables(&cells, &grid);
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let csv = a.out.join("envelope.csv");
+    print_tables(&cells, grid);
+    if let Some(dir) = stem.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let csv = stem.with_extension("csv");
     prf_files::atomic::write(&csv, to_csv(&cells))
         .with_context(|| format!("writing {}", csv.display()))?;
     let title = format!(
@@ -116,10 +188,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let [svg, png] = plots::save(
         &EnvelopeMap {
             cells: &cells,
-            grid: &grid,
+            grid,
             title: &title,
         },
-        &a.out.join("envelope"),
+        stem,
     )?;
     println!(
         "wrote {}, {} and {}",
@@ -127,7 +199,60 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         svg.display(),
         png.display()
     );
-    Ok(())
+    let yaws = grid
+        .yaws
+        .iter()
+        .map(|&yaw| {
+            let slice = cells.iter().filter(|c| c.dyaw == yaw);
+            let safe = slice.clone().filter(|c| c.outcome == Outcome::Safe).count();
+            (safe, slice.count(), safe_square(&cells, yaw))
+        })
+        .collect();
+    Ok(Summary {
+        task: ft.label(),
+        side: format!("{} ({kind})", end.side()),
+        yaws,
+    })
+}
+
+/// The safe square, m, as the summary shows it: "±x mm", or "–" when the nominal pose is not
+/// safe.
+fn square(s: Option<f64>) -> String {
+    s.map_or("–".into(), |r| format!("±{:.0} mm", r * 1e3))
+}
+
+/// One row per task and side: per yaw the safe square and the safe offsets.
+fn print_summary(summaries: &[Summary], grid: &Grid) {
+    println!("safe square around the nominal pose (and offsets at risk 0) per task, side and yaw:");
+    let mut head = format!("{:<28} {:<16}", "task", "side");
+    for yaw in &grid.yaws {
+        let _ = write!(head, " {:>16}", format!("yaw {:+.1}°", yaw.to_degrees()));
+    }
+    println!("{head}");
+    for s in summaries {
+        let mut row = format!("{:<28} {:<16}", s.task, s.side);
+        for (safe, all, sq) in &s.yaws {
+            let _ = write!(row, " {:>16}", format!("{} ({safe}/{all})", square(*sq)));
+        }
+        println!("{row}");
+    }
+}
+
+fn summary_csv(summaries: &[Summary], grid: &Grid) -> String {
+    let mut out = String::from("task,side,dyaw_deg,safe,offsets,safe_square_mm\n");
+    for s in summaries {
+        for (yaw, (safe, all, sq)) in grid.yaws.iter().zip(&s.yaws) {
+            let _ = writeln!(
+                out,
+                "{},{},{:.2},{safe},{all},{}",
+                s.task,
+                s.side,
+                yaw.to_degrees(),
+                sq.map_or(String::new(), |r| format!("{:.1}", r * 1e3))
+            );
+        }
+    }
+    out
 }
 
 fn symbol(o: &Outcome) -> char {
@@ -222,6 +347,7 @@ impl Chart for EnvelopeMap<'_> {
             let mut chart = ChartBuilder::on(panel)
                 .caption(format!("yaw {:+.1}°", yaw.to_degrees()), ("sans-serif", 14))
                 .margin(8)
+                .margin_right(24)
                 .x_label_area_size(30)
                 .y_label_area_size(40)
                 .build_cartesian_2d(-lim..lim, -lim..lim)?;
@@ -229,6 +355,8 @@ impl Chart for EnvelopeMap<'_> {
                 .configure_mesh()
                 .x_desc("dx mm")
                 .y_desc("dy mm")
+                .x_label_formatter(&|v| format!("{v:.0}"))
+                .y_label_formatter(&|v| format!("{v:.0}"))
                 .disable_mesh()
                 .draw()?;
             chart.draw_series(self.cells.iter().filter(|c| c.dyaw == yaw).map(|c| {

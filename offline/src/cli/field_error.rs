@@ -8,6 +8,7 @@ use prf_files::dataset::Dataset;
 use prf_files::robot;
 use prf_learn::LearnConfig;
 use prf_learn::learn::{Learner, learn_into};
+use prf_learn::workspace::WorkspaceConfig;
 use prf_offline::field_error::{BAND_BEYOND_EPSILON, Spread, measure};
 use std::io::Write;
 use std::path::PathBuf;
@@ -23,8 +24,14 @@ pub struct Args {
     #[arg(long, default_value_t = 2000)]
     pub points: usize,
     /// Workspace voxel (node spacing) to learn with, m (as `prf learn --voxel`).
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = WorkspaceConfig::default().voxel)]
     pub voxel: f64,
+    /// Certification margin to learn with, m (as `prf learn --margin`).
+    #[arg(long, default_value_t = WorkspaceConfig::default().certify_margin)]
+    pub margin: f64,
+    /// The demonstrated spheres are moved by up to this distance, mm.
+    #[arg(long, default_value_t = 10.0)]
+    pub moved_mm: f64,
     /// Seed of the points.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -38,12 +45,13 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let ds = Dataset::read(&a.dataset, &model)?;
     let mut cfg = LearnConfig::default();
     cfg.workspace.voxel = a.voxel;
+    cfg.workspace.certify_margin = a.margin;
     let bar = Bar::new("learning", "units", false);
     let mut learner = Learner::new(&ds, &model, &cfg)?;
     let k = learn_into(&mut learner, &ds.demonstrations, &|p| bar.report(p))?;
     bar.finish();
     let eps = k.config.workspace.epsilon;
-    let types = measure(&learner, &k, a.points, a.seed);
+    let types = measure(&learner, &k, a.points, a.moved_mm * 1e-3, a.seed);
     println!(
         "Ω+ field ({:.0} mm voxel) against the exact Ω+ (every demonstrated ball, ε = {:.0} mm), \
          {} points per type within {:.0} mm of the boundary; mm, median / p95 / max",
@@ -93,6 +101,29 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         "grid + quantization: field − (min over the feature balls); thinning: (min over the \
          feature balls) − exact"
     );
+    println!(
+        "\ndemonstrated spheres moved by up to {:.0} mm ({} per type; margin {:.0} mm): the \
+         risk term sdf + r_j (Eq. 16), mm, median / p95 / max",
+        a.moved_mm,
+        a.points,
+        k.config.workspace.certify_margin * 1e3
+    );
+    println!(
+        "{:<10} {:>22} {:>22} {:>22} {:>28}",
+        "type", "field", "exact", "field − exact", "certified (of exact's)"
+    );
+    for t in &types {
+        let (share, of) = t.moved_certified();
+        println!(
+            "{:<10} {:>22} {:>22} {:>22} {:>20.1}% of {:>5}",
+            t.name,
+            mm(Spread::of(t.moved.iter().map(|m| m.0).collect())),
+            mm(Spread::of(t.moved.iter().map(|m| m.1).collect())),
+            mm(Spread::of(t.moved.iter().map(|m| m.0 - m.1).collect())),
+            100.0 * share,
+            of
+        );
+    }
     if let Some(path) = &a.csv {
         let mut out = String::from("type,field_m,features_m,exact_m\n");
         for t in &types {

@@ -90,7 +90,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     println!(
-        "\nmax over {} tasks: executor tick {max_tick} instructions (budget {MAX_TICK_INSTRUCTIONS}, goal {GOAL_TICK_INSTRUCTIONS}); arm tick without the output stage mean {core_mean}, max {core_max} (issue 20's goal {GOAL_CORE_MEAN} / {GOAL_CORE_MAX}); planning {:.1} M (bound {:.0} M); static RAM {:.1} KiB (budget {} KiB)",
+        "\nmax over {} tasks: executor tick {max_tick} instructions (budget {MAX_TICK_INSTRUCTIONS}, goal {GOAL_TICK_INSTRUCTIONS}); arm tick without the output stage mean {core_mean}, max {core_max} (goal {GOAL_CORE_MEAN} / {GOAL_CORE_MAX}); planning {:.1} M (bound {:.0} M); static RAM {:.1} KiB (budget {} KiB)",
         reports.len(),
         max_plan as f64 / 1e6,
         MAX_PLANNING_INSTRUCTIONS as f64 / 1e6,

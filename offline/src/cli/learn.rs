@@ -34,13 +34,15 @@ pub struct Args {
     #[arg(long, default_value_t = 0.03)]
     pub clearance: f64,
     /// Workspace voxel (node spacing), m.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = prf_learn::workspace::WorkspaceConfig::default().voxel)]
     pub voxel: f64,
     /// Bricks whose nodes are all at least this far outside Ω+ store one value, m.
-    #[arg(long, default_value_t = 0.08)]
+    #[arg(long, default_value_t = prf_learn::workspace::WorkspaceConfig::default().far)]
     pub far: f64,
-    /// Every demonstrated sphere is certified with this margin, m.
-    #[arg(long, default_value_t = 0.001)]
+    /// Every demonstrated sphere is certified with this margin, m: a program whose spheres
+    /// stay within it of where the same spheres were demonstrated rates risk 0. Larger: more
+    /// part offsets plan at risk 0, a larger blob. At most ε − 3 mm (and at least 1 mm)
+    #[arg(long, default_value_t = prf_learn::workspace::REUSE_MARGIN)]
     pub margin: f64,
     /// Also write the knowledge base (the learner's whole state) to this file, for
     /// `--add … --into`.
