@@ -73,7 +73,7 @@ section "Learned workspaces against the exact Ω+" \
   echo "| | |"
   echo "|---|---|"
   echo "| date | $(date -u '+%Y-%m-%d %H:%M UTC') |"
-  echo "| commit | \`$(git rev-parse --short HEAD)\`$(git diff --quiet HEAD -- . 2>/dev/null || echo ' (with uncommitted changes)') |"
+  echo "| commit | \`$(git rev-parse --short HEAD)\`$(git diff --quiet HEAD -- . ":(exclude)$out" 2>/dev/null || echo ' (with uncommitted changes)') |"
   echo "| CPU | $(awk -F': ' '/^model name/ { print $2; exit }' /proc/cpuinfo) |"
   echo "| cores | $(nproc) |"
   echo "| load average before the runs | $(cut -d' ' -f1-3 /proc/loadavg) |"

@@ -13,10 +13,10 @@
 //!    ([`crate::edt`]) to the nearest node inside Ω+, an upper bound of their distance.
 //! 4. **Encoding**: bricks far outside become uniform; feature balls are quantized
 //!    conservatively (offset rounded, radius shrunk by the rounding error).
-//! 5. **Certificates** ([`crate::certify`]): the demonstrated spheres that the encoded field
-//!    does not certify with margin [`WorkspaceConfig::certify_margin`] are certified by
-//!    demonstrated balls added to the cells around them (a greedy cover), so every
-//!    demonstrated configuration, and every one within the margin of it, has risk 0.
+//! 5. **Certificates** ([`crate::certify`]): every demonstrated sphere that the encoded field
+//!    does not certify with margin [`WorkspaceConfig::certify_margin`] gets its own ball as a
+//!    certificate in the cells around it, so every demonstrated configuration, and every one
+//!    whose spheres lie within the margin of it, has risk 0.
 
 use crate::certify::{self, Certified};
 use crate::edt;
@@ -81,9 +81,9 @@ impl WorkspaceConfig {
 
 /// The default certification margin, m: every demonstrated sphere is certified for centres
 /// within 8 mm of where it was, so a part placed some millimetres off still plans at risk 0.
-/// It sizes the blob: at 8 mm the example cell's workspaces take about twice what 1 mm
-/// takes (see docs/benchmarks.md).
-pub const REUSE_MARGIN: f64 = 0.01;
+/// It sizes the blob: with the 100 mm voxel, the example cell's workspaces take about twice
+/// what 1 mm with a 50 mm voxel took.
+pub const REUSE_MARGIN: f64 = 0.008;
 
 /// What a sphere's own certificate ball can lose to its mm rounding at the sphere's centre, m:
 /// the centre's rounding (up to √3/2 mm) twice (the centre moves, and the radius shrinks by
