@@ -457,12 +457,12 @@ fn runtime(path: &std::path::Path, secs: f64) -> Result<()> {
     );
     report("previous: each task planned on its own", &each, "ms");
     report(
-        "before: on its own, anchored lookups, every sphere placed",
+        "baseline: on its own, anchored lookups, every sphere placed",
         &anchored,
         "ms",
     );
     report(
-        "before that: on its own, every sphere reads the field",
+        "baseline: on its own, every sphere reads the field",
         &full,
         "ms",
     );
