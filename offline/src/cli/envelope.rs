@@ -199,15 +199,7 @@ fn envelope(
         svg.display(),
         png.display()
     );
-    let yaws = grid
-        .yaws
-        .iter()
-        .map(|&yaw| {
-            let slice = cells.iter().filter(|c| c.dyaw == yaw);
-            let safe = slice.clone().filter(|c| c.outcome == Outcome::Safe).count();
-            (safe, slice.count(), safe_square(&cells, yaw))
-        })
-        .collect();
+    let yaws = grid.yaws.iter().map(|&yaw| tally(&cells, yaw)).collect();
     Ok(Summary {
         task: ft.label(),
         side: format!("{} ({kind})", end.side()),
@@ -264,21 +256,29 @@ fn symbol(o: &Outcome) -> char {
     }
 }
 
+/// At yaw `yaw`: the offsets at risk 0, all offsets, and the safe square ([`safe_square`]).
+fn tally(cells: &[Cell], yaw: f64) -> (usize, usize, Option<f64>) {
+    let at_yaw = cells.iter().filter(|c| c.dyaw == yaw);
+    let safe = at_yaw
+        .clone()
+        .filter(|c| c.outcome == Outcome::Safe)
+        .count();
+    (safe, at_yaw.count(), safe_square(cells, yaw))
+}
+
 /// One table per yaw: rows y (top: +range), columns x; and the safe square.
 fn print_tables(cells: &[Cell], grid: &Grid) {
     let axis = grid.offsets();
     println!("● risk 0 (safe)  · risky  ? budget spent, not shown safe  x no plan");
     for &yaw in &grid.yaws {
         let slice: Vec<&Cell> = cells.iter().filter(|c| c.dyaw == yaw).collect();
-        let safe = slice.iter().filter(|c| c.outcome == Outcome::Safe).count();
-        let square = safe_square(cells, yaw)
-            .map_or("none (the nominal pose is not safe)".into(), |r| {
-                format!("|dx|, |dy| ≤ {:.0} mm", r * 1e3)
-            });
+        let (safe, all, square) = tally(cells, yaw);
+        let square = square.map_or("none (the nominal pose is not safe)".into(), |r| {
+            format!("|dx|, |dy| ≤ {:.0} mm", r * 1e3)
+        });
         println!(
-            "\nyaw {:+.1}°: {safe}/{} offsets safe; safe square around the nominal pose: {square}",
-            yaw.to_degrees(),
-            slice.len()
+            "\nyaw {:+.1}°: {safe}/{all} offsets safe; safe square around the nominal pose: {square}",
+            yaw.to_degrees()
         );
         let mut head = String::from("  dy\\dx mm");
         for x in &axis {
