@@ -3,8 +3,9 @@
 //! 0 with a blob. It answers the cell engineer's first question: how precisely must a part be
 //! placed for the learned programs to apply.
 
+use crate::ground_truth::{TrueClearance, true_clearance};
 use prf_runtime::plan::plan;
-use prf_runtime::skill_plan::PlanBudget;
+use prf_runtime::skill_plan::{PlanBudget, Search};
 use prf_runtime::{Runtime, RuntimeConfig};
 use prf_sim::tasks::{FloorTask, FloorTaskError};
 use prf_sim::world::World;
@@ -15,16 +16,17 @@ use rayon::prelude::*;
 pub enum Outcome {
     /// A risk-0 plan: reuse is safe here.
     Safe,
-    /// The optimum is risky: J* (m).
-    Risky(f64),
-    /// The budget ran out without a risk-0 plan: J* is at least this (m).
+    /// J* > 0 is proven: the best plan found has risk `j` (m; ∞ when the budget ran out
+    /// before one was found) and J* is at least `lower` (m; `j` when the optimum is known).
+    Risky { j: f64, lower: f64 },
+    /// The budget ran out before J* > 0 or J* = 0 was proven: J* is at least this (m).
     Unknown(f64),
     /// No plan at all (nothing integrates, or the task is refused).
     NoPlan,
 }
 
 /// One offset of the grid and its outcome.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Cell {
     /// Offset along the location frame's x and y, m, and about its vertical, rad.
     pub dx: f64,
@@ -34,6 +36,20 @@ pub struct Cell {
     /// RDMP integrations and steps the plan took.
     pub integrations: u32,
     pub steps: u64,
+    /// A safe offset's program against the true cell, when [`Options::check`] asked for it
+    /// (or why it could not be executed).
+    pub truth: Option<Result<TrueClearance, String>>,
+}
+
+/// How [`map`] plans each offset.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// The work each plan may do.
+    pub budget: PlanBudget,
+    /// How each plan searches.
+    pub search: Search,
+    /// Execute each safe offset's program and measure it against the true cell.
+    pub check: bool,
 }
 
 /// The grid to map: offsets −range…range in `step` along x and y, and the given yaws.
@@ -65,15 +81,14 @@ pub fn shifted(world: &World, kind: &str, dx: f64, dy: f64, dyaw: f64) -> World 
 }
 
 /// Plans task (`part`, `from`, `to`) at every offset of `grid` of the part pose at location
-/// type `kind`, each within `budget`, in parallel; `done` is called once per offset.
-#[allow(clippy::too_many_arguments)]
+/// type `kind` as `options` say, in parallel; `done` is called once per offset.
 pub fn map(
     blob: &[u8],
     world: &World,
     kind: &str,
     task: (&str, &str, &str),
     grid: &Grid,
-    budget: PlanBudget,
+    options: Options,
     done: &(dyn Fn() + Sync),
 ) -> Result<Vec<Cell>, FloorTaskError> {
     // Names are checked once, up front.
@@ -89,7 +104,8 @@ pub fn map(
         })
         .collect();
     let config = RuntimeConfig {
-        plan_budget: budget,
+        plan_budget: options.budget,
+        search: options.search,
         ..RuntimeConfig::default()
     };
     Ok(offsets
@@ -103,6 +119,7 @@ pub fn map(
                 outcome,
                 integrations,
                 steps,
+                truth: None,
             };
             let out = match (
                 Runtime::load_with(blob, config),
@@ -111,13 +128,25 @@ pub fn map(
                 (Ok(rt), Ok(ft)) => match plan(&rt, &ft.task()) {
                     Ok(p) => {
                         let s = &p.skills;
-                        let outcome = match (s.feasible, s.exhausted, s.choice) {
-                            (true, _, _) => Outcome::Safe,
-                            (false, Some(lower), _) => Outcome::Unknown(lower),
-                            (false, None, Some(_)) => Outcome::Risky(s.j),
-                            (false, None, None) => Outcome::NoPlan,
+                        let outcome = if s.feasible {
+                            Outcome::Safe
+                        } else if !s.decided {
+                            Outcome::Unknown(s.lower)
+                        } else if s.lower == f64::INFINITY {
+                            Outcome::NoPlan
+                        } else {
+                            Outcome::Risky {
+                                j: s.j,
+                                lower: s.lower,
+                            }
                         };
-                        cell(outcome, s.stats.integrations, s.stats.steps)
+                        let mut c = cell(outcome, s.stats.integrations, s.stats.steps);
+                        if options.check && c.outcome == Outcome::Safe {
+                            c.truth = Some(
+                                true_clearance(&w, &rt, &ft, &p).map_err(|e| format!("{e:#}")),
+                            );
+                        }
+                        c
                     }
                     Err(_) => cell(Outcome::NoPlan, 0, 0),
                 },

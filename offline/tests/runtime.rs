@@ -14,7 +14,7 @@ use prf_runtime::program::Segment;
 use prf_runtime::recall::HOST_SLOTS;
 use prf_runtime::reverse::Reversal;
 use prf_runtime::skill_plan::{
-    Evaluation, PlanBudget, PttClasses, PttSides, evaluate_arm_motion, trace_arm_motion,
+    Evaluation, PlanBudget, PttClasses, PttSides, Search, evaluate_arm_motion, trace_arm_motion,
 };
 use prf_runtime::task::{Missing, TaskError};
 use prf_runtime::{LoadError, Runtime};
@@ -76,8 +76,8 @@ fn arm_setpoints(run: &Execution, segment: usize) -> Vec<[f64; 7]> {
 }
 
 /// Soundness of a plan: its executed program keeps clearance ≥ `r` from the true boxes (and
-/// floor) at every tick of every arm motion, with the platform at the chosen stances. The
-/// smallest clearance.
+/// floor) at every tick of every arm motion, with the platform at the chosen stances
+/// ([`prf_offline::ground_truth::arm_clearance`]). The smallest clearance.
 fn true_clearance(
     rt: &Runtime<'_>,
     cell: &Cell,
@@ -85,33 +85,15 @@ fn true_clearance(
     p: &prf_runtime::plan::Plan,
     r: f64,
 ) -> f64 {
-    let mut worst = f64::INFINITY;
-    let program = p.program.as_ref().expect("program");
-    let run = execute(rt, program, &ft.home, ExecutorConfig::default(), 200_000);
-    assert!(run.fault.is_none(), "{}: {:?}", ft.label(), run.fault);
-    assert_eq!(run.setpoints.last().map(|s| s.mode), Some(Mode::Done));
-    let (s1, s2) = p.stances.expect("stances");
-    for (i, seg) in program.segments.iter().enumerate() {
-        if !matches!(seg, Segment::Arm { .. } | Segment::Reverse { .. }) {
-            continue;
-        }
-        let platform = if i < 4 { s1 } else { s2 };
-        let base = platform * rt.model.mount;
-        let near = cell.obstacles_near(prf_runtime::executor::planar(&platform));
-        for q in arm_setpoints(&run, i) {
-            let kin = ArmKinematics::new(&rt.model, &JointVector::from(q));
-            let c = cell.arm_clearance(&base, &kin, &near);
-            worst = worst.min(c.world);
-            assert!(
-                c.world >= r,
-                "{}: segment {i} comes {:.1} mm from {:?} (r = {} mm)",
-                ft.label(),
-                c.world * 1e3,
-                c.world_contact,
-                r * 1e3
-            );
-        }
-    }
+    let (worst, contact) = prf_offline::ground_truth::arm_clearance(rt, cell, ft, p)
+        .unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(
+        worst >= r,
+        "{}: comes {:.1} mm from {contact} (r = {} mm)",
+        ft.label(),
+        worst * 1e3,
+        r * 1e3
+    );
     worst
 }
 
@@ -257,6 +239,7 @@ fn shifted_world(dx: f64, yaw_deg: f64) -> World {
 /// blob `bytes` affords: J*, the choice and the documented tie order. The number of tasks
 /// with J* > 0, and of candidates the planner skipped by their bound.
 fn assert_plans_equal_the_grid(world: &World, bytes: &[u8]) -> (usize, u32) {
+    use rayon::prelude::*;
     let rt = Runtime::load(bytes).expect("load");
     let classes = PttClasses::of(&rt).expect("classes");
     let (mut risky, mut bounded) = (0, 0);
@@ -268,6 +251,16 @@ fn assert_plans_equal_the_grid(world: &World, bytes: &[u8]) -> (usize, u32) {
         let sides = PttSides::new(&rt, &task, &resolved, &classes).expect("sides");
         let planned = plan(&rt, &task).expect("plan").skills;
         bounded += planned.stats.bounded;
+        // The baseline's single search, and the verdict alone, on the same blob.
+        let with = |search| {
+            let config = prf_runtime::RuntimeConfig {
+                search,
+                ..Default::default()
+            };
+            let rt = Runtime::load_with(bytes, config).expect("load");
+            plan(&rt, &task).expect("plan").skills
+        };
+        let (optimum, decide) = (with(Search::Optimum), with(Search::Decide));
         // The full grid: every (grasp, stance 1, pick skill, stance 2, place skill), J and the
         // documented tie key (J, grasp, r_pick, pick position, r_place, place position).
         let candidates = |side: &prf_runtime::skill_plan::Side<'_>, g: usize| {
@@ -284,14 +277,13 @@ fn assert_plans_equal_the_grid(world: &World, bytes: &[u8]) -> (usize, u32) {
         let mut orders = Vec::new();
         for g in 0..sides.grasps {
             let (pick, place) = (candidates(&sides.pick, g), candidates(&sides.place, g));
-            let r1: Vec<_> = pick
-                .iter()
-                .map(|&(s, k)| brute_force_risk(&rt, &sides.pick, s as usize, g, k))
-                .collect();
-            let r2: Vec<_> = place
-                .iter()
-                .map(|&(s, k)| brute_force_risk(&rt, &sides.place, s as usize, g, k))
-                .collect();
+            let risks = |side, cands: &[(u8, u16)]| -> Vec<_> {
+                cands
+                    .par_iter()
+                    .map(|&(s, k)| brute_force_risk(&rt, side, s as usize, g, k))
+                    .collect()
+            };
+            let (r1, r2) = (risks(&sides.pick, &pick), risks(&sides.place, &place));
             // The admissible bounds are below every candidate's risk.
             for (side, cands, risks) in [(&sides.pick, &pick, &r1), (&sides.place, &place, &r2)] {
                 for (&(s, _), r) in cands.iter().zip(risks) {
@@ -317,10 +309,24 @@ fn assert_plans_equal_the_grid(world: &World, bytes: &[u8]) -> (usize, u32) {
             orders.push((pick, place));
         }
         assert_eq!(planned.stats.grid_integrations, grid, "{}", ft.label());
+        let verdict = (planned.feasible, planned.decided, planned.lower);
+        assert_eq!(
+            (optimum.choice, optimum.j, optimum.r_pick, optimum.r_place),
+            (planned.choice, planned.j, planned.r_pick, planned.r_place),
+            "{}: the optimum search",
+            ft.label()
+        );
+        assert_eq!((optimum.feasible, optimum.decided, optimum.lower), verdict);
+        assert!(decide.decided && planned.decided, "{}", ft.label());
+        assert_eq!(decide.feasible, planned.feasible, "{}: decided", ft.label());
+        if decide.feasible {
+            assert_eq!(decide.choice, planned.choice, "{}", ft.label());
+        }
         let Some((j, g, r_pick, i, r_place, k)) = best else {
             assert_eq!(planned.choice, None, "{}: no candidate reaches", ft.label());
             continue;
         };
+        assert_eq!(planned.lower, j, "{}: the optimum is known", ft.label());
         let c = planned.choice.expect("choice");
         assert_eq!(planned.j, j, "{}: J*", ft.label());
         assert_eq!(
@@ -464,24 +470,44 @@ fn a_planner_recalls_shared_candidates_and_plans_as_each_task_alone() {
             );
         }
     }
-    let budgeted = prf_runtime::RuntimeConfig {
-        plan_budget: PlanBudget {
-            steps: u64::MAX - 1,
-        },
-        ..Default::default()
-    };
-    let rt = Runtime::load_with(full_blob(), budgeted).expect("load");
-    let mut slots = vec![None; HOST_SLOTS];
-    let mut planner = Planner::new(&rt, &mut slots);
-    for ft in world_tasks(&World::example()).iter().take(3) {
-        let p = planner.plan(&ft.task()).expect("plan");
-        assert_eq!(
-            p.skills.stats.recalled,
-            0,
-            "{}: recalled within a budget",
-            ft.label()
-        );
+}
+
+/// Within a step budget a recalled evaluation is charged the steps it took: each plan is the
+/// one the task gets alone with the same budget, where the budget runs out included.
+#[test]
+fn a_planner_within_a_budget_plans_as_each_task_alone() {
+    let reduced = reduced_blob(&World::example());
+    let world = shifted_world(0.02, 8.0);
+    let (mut recalled, mut exhausted) = (0, 0);
+    for steps in [20_000, 200_000] {
+        let config = prf_runtime::RuntimeConfig {
+            plan_budget: PlanBudget { steps },
+            ..Default::default()
+        };
+        let rt = Runtime::load_with(&reduced, config).expect("load");
+        let mut slots = vec![None; HOST_SLOTS];
+        let mut planner = Planner::new(&rt, &mut slots);
+        for ft in world_tasks(&world) {
+            let label = format!("{} ({steps} steps)", ft.label());
+            match (planner.plan(&ft.task()), plan(&rt, &ft.task())) {
+                (Ok(mut shared), Ok(alone)) => {
+                    let (s, a) = (shared.skills.stats, alone.skills.stats);
+                    assert_eq!(s.charged, a.charged, "{label}");
+                    assert!(a.charged <= steps, "{label}: {} charged", a.charged);
+                    shared.skills.stats = a;
+                    assert_eq!(shared, alone, "{label}");
+                    recalled += s.recalled;
+                    exhausted += alone.skills.exhausted.is_some() as usize;
+                }
+                (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{label}"),
+            }
+        }
     }
+    println!("{recalled} recalled, {exhausted} plans ran out of budget");
+    assert!(
+        recalled > 0 && exhausted > 0,
+        "{recalled} recalled, {exhausted} ran out"
+    );
 }
 
 /// Issue 22: with the part poses moved (2 cm and 8°: most tasks risky; 8 cm: the admissible
@@ -654,45 +680,51 @@ fn a_spent_budget_brackets_the_optimum() {
     let bytes = reduced_blob(&World::example());
     let world = shifted_world(0.02, 8.0);
     let full = Runtime::load(&bytes).expect("load");
-    let mut exhausted = 0;
+    let (mut exhausted, mut decided) = (0, 0);
     for ft in world_tasks(&world) {
         let Ok(optimum) = plan(&full, &ft.task()) else {
             continue;
         };
         let optimum = optimum.skills;
-        for steps in [2_000, 20_000] {
+        for (steps, search) in [2_000, 200_000]
+            .into_iter()
+            .flat_map(|n| [Search::DecideFirst, Search::Decide, Search::Optimum].map(|s| (n, s)))
+        {
+            let label = format!("{} ({steps} steps, {search:?})", ft.label());
             let config = RuntimeConfig {
                 plan_budget: PlanBudget { steps },
+                search,
                 ..RuntimeConfig::default()
             };
             let rt = Runtime::load_with(&bytes, config).expect("load");
             let p = plan(&rt, &ft.task()).expect("plan").skills;
+            assert!(p.stats.steps <= steps, "{label}: {} steps", p.stats.steps);
+            // Whatever was searched: J* within [lower, j], and a decided verdict is J*'s.
             assert!(
-                p.stats.steps <= steps,
-                "{}: {} steps",
-                ft.label(),
-                p.stats.steps
+                p.lower <= optimum.j && optimum.j <= p.j,
+                "{label}: {} ≤ J* {} ≤ {} fails",
+                p.lower,
+                optimum.j,
+                p.j
             );
-            match p.exhausted {
-                Some(lower) => {
+            if p.decided {
+                decided += 1;
+                assert_eq!(p.feasible, optimum.feasible, "{label}");
+            }
+            match (p.exhausted, search) {
+                (Some(lower), _) => {
                     exhausted += 1;
-                    assert!(
-                        lower <= optimum.j && optimum.j <= p.j,
-                        "{}: {lower} ≤ J* {} ≤ {} fails",
-                        ft.label(),
-                        optimum.j,
-                        p.j
-                    );
+                    assert_eq!(lower, p.lower, "{label}");
                 }
-                None => assert_eq!(
-                    (p.j, p.choice),
-                    (optimum.j, optimum.choice),
-                    "{}",
-                    ft.label()
-                ),
+                // Refuted without looking for the optimum.
+                (None, Search::Decide) if !p.feasible => {
+                    assert!(p.decided && p.choice.is_none() && p.lower > 0.0, "{label}")
+                }
+                (None, _) => assert_eq!((p.j, p.choice), (optimum.j, optimum.choice), "{label}"),
             }
         }
     }
+    println!("{decided} decided, {exhausted} ran out of budget");
     assert!(exhausted > 0, "some budget should run out");
 }
 
@@ -1332,7 +1364,7 @@ fn every_drive_of_the_planned_programs_is_clear() {
 /// map calls safe plans a program that keeps r from the true boxes when executed.
 #[test]
 fn every_offset_of_the_envelope_called_safe_is_sound() {
-    use prf_offline::envelope::{Grid, Outcome, map, shifted};
+    use prf_offline::envelope::{Grid, Options, Outcome, map};
     let world = World::example();
     let grid = Grid {
         range: 0.004,
@@ -1340,25 +1372,39 @@ fn every_offset_of_the_envelope_called_safe_is_sound() {
         yaws: vec![0.0],
     };
     let task = ("Part1", "CNC1", "Table1");
-    let budget = PlanBudget { steps: 2_000_000 };
-    let cells = map(full_blob(), &world, "CNC", task, &grid, budget, &|| ()).expect("map");
+    let options = Options {
+        budget: PlanBudget::UNLIMITED,
+        search: Search::Decide,
+        check: true,
+    };
+    let cells = map(full_blob(), &world, "CNC", task, &grid, options, &|| ()).expect("map");
     assert_eq!(cells.len(), 9);
-    let rt = Runtime::load(full_blob()).expect("load");
-    let cell = Cell::new(&world, &rt.model);
+    // Without a budget every offset is decided.
+    assert!(
+        cells
+            .iter()
+            .all(|c| !matches!(c.outcome, Outcome::Unknown(_))),
+        "{cells:?}"
+    );
     let mut safe = 0;
     for c in &cells {
         if (c.dx, c.dy) == (0.0, 0.0) {
             assert_eq!(c.outcome, Outcome::Safe, "the nominal pose");
         }
         if c.outcome != Outcome::Safe {
+            assert!(c.truth.is_none(), "only safe offsets are checked");
             continue;
         }
         safe += 1;
-        let w = shifted(&world, "CNC", c.dx, c.dy, c.dyaw);
-        let ft = FloorTask::new(&w, task.0, task.1, task.2).expect("task");
-        let p = plan(&rt, &ft.task()).expect("plan");
-        assert_eq!(p.skills.j, 0.0, "({}, {})", c.dx, c.dy);
-        true_clearance(&rt, &cell, &ft, &p, world.clearance.acceptable);
+        // The map executed the safe offset's program in the true cell of the moved part.
+        let truth = c.truth.as_ref().expect("checked").as_ref();
+        let truth = truth.unwrap_or_else(|e| panic!("({}, {}): {e}", c.dx, c.dy));
+        assert!(
+            truth.keeps(world.clearance.acceptable),
+            "({}, {}): {truth:?}",
+            c.dx,
+            c.dy
+        );
     }
     println!("{safe} of 9 offsets (±4 mm) safe: {cells:?}");
 }
@@ -1374,15 +1420,12 @@ fn every_offset_of_the_envelope_called_safe_is_sound() {
 fn risk_0_plans_for_a_moved_part_keep_r_in_the_true_cell() {
     use prf_offline::envelope::shifted;
     use prf_runtime::RuntimeConfig;
-    use prf_runtime::skill_plan::PlanBudget;
-    use prf_sim::navigation::{
-        CHECK_STEP, PartTracker, drive_phases, execute_navigating, part_size,
-    };
     use rayon::prelude::*;
     let world = World::example();
     let r = world.clearance.acceptable;
+    // Searched to the end for the verdict alone: every offset is decided.
     let config = RuntimeConfig {
-        plan_budget: PlanBudget { steps: 1_000_000 },
+        search: Search::Decide,
         ..RuntimeConfig::default()
     };
     let mut offsets = Vec::new();
@@ -1401,33 +1444,17 @@ fn risk_0_plans_for_a_moved_part_keep_r_in_the_true_cell() {
             let w = shifted(&world, kind, dx, dy, dyaw);
             let label = format!("part at {kind} moved by ({dx}, {dy}) m, {dyaw:.3} rad");
             let rt = Runtime::load_with(full_blob(), config).expect("load");
-            let cell = Cell::new(&w, &rt.model);
             let ft = FloorTask::new(&w, "Part1", "CNC1", "Table1").expect("task");
             let p = plan(&rt, &ft.task()).unwrap_or_else(|e| panic!("{label}: {e}"));
+            assert!(p.skills.decided, "{label}: not decided");
             if !p.skills.feasible {
                 return None;
             }
             assert_eq!(p.skills.j, 0.0, "{label}");
-            let worst_arm = true_clearance(&rt, &cell, &ft, &p, r);
-            let program = p.program.as_ref().expect("program");
-            let (run, _) = execute_navigating(&w, &rt, program, &ft, 600_000).expect("drives");
-            let part = || PartTracker::new(part_size(&w, &ft.part.1), ft.part_pose);
-            for ph in drive_phases(&cell, &run.samples, part()) {
-                assert!(
-                    ph.min.min() >= r - CHECK_STEP / 2.0,
-                    "{label}: a drive keeps {:?}",
-                    ph.min
-                );
-            }
-            let held = prf_sim::validate::check_held_part(&cell, &run.samples, part(), 0.002);
-            assert!(
-                held.min >= r - CHECK_STEP / 2.0,
-                "{label}: the held part comes within {:.1} mm of {} at t = {:.3} s",
-                held.min * 1e3,
-                held.obstacle,
-                held.min_t
-            );
-            Some(worst_arm.min(held.min))
+            let truth = prf_offline::ground_truth::true_clearance(&w, &rt, &ft, &p)
+                .unwrap_or_else(|e| panic!("{label}: {e:#}"));
+            assert!(truth.keeps(r), "{label}: {truth:?} (r = {r} m)");
+            Some(truth.min())
         })
         .collect();
     let safe: Vec<f64> = checked.iter().flatten().copied().collect();

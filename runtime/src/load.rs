@@ -52,6 +52,8 @@ pub struct RuntimeConfig {
     pub risk_threshold: f64,
     /// The work skill planning may do per task (default: unlimited; the firmware sets one).
     pub plan_budget: crate::skill_plan::PlanBudget,
+    /// How skill planning searches (default [`crate::skill_plan::Search::DecideFirst`]).
+    pub search: crate::skill_plan::Search,
     /// How risk lookups may be settled without reading the field (default
     /// [`Lookups::Travelled`]; the others are the benchmark's baselines). Risks are the same
     /// with each.
@@ -64,6 +66,7 @@ impl Default for RuntimeConfig {
             rdmp: RdmpConfig::default(),
             risk_threshold: 0.0,
             plan_budget: crate::skill_plan::PlanBudget::UNLIMITED,
+            search: crate::skill_plan::Search::DecideFirst,
             lookups: Lookups::Travelled,
         }
     }

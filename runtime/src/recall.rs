@@ -16,8 +16,10 @@
 //!   nothing is known, so it is integrated;
 //! - failed, missed or too fast: the same, whatever the bound (none depends on the risk).
 //!
-//! Only a search without a step budget recalls: a budget counts steps integrated, and a
-//! recalled evaluation integrates none.
+//! Under a step budget a recalled evaluation is charged the steps it took when integrated
+//! ([`crate::skill_plan::PlanStats::charged`]), and one that would overrun what is left is
+//! integrated again (and capped as it would be): the budget runs out where it would without
+//! the recall.
 //!
 //! The memory is the caller's ([`Recall::new`] takes the slots): none on the firmware, which
 //! plans one task; [`HOST_SLOTS`] in the host tools. A candidate is found by a linear scan,

@@ -24,6 +24,18 @@
 //! knows: the best plan found (an upper bound of J*) and the smallest bound of what was not
 //! searched (a lower bound of J*).
 //!
+//! **Decide first** ([`Search::DecideFirst`], the default). The question a task asks first is
+//! whether J* ≤ the risk threshold. The search runs once with every candidate pruned as soon
+//! as its risk exceeds the threshold: no field lookups after that (its integration still runs
+//! to the end, where its time scale, and so the stream rated, is settled), no later grasp
+//! searched for a better J, no place side for a pick side above the threshold. If that finds
+//! a plan, it is the optimum's own choice (the optimum
+//! search's sides keep the first candidate of least risk, and every candidate it could prefer
+//! is at most the threshold too, so neither search stops it); otherwise J* > threshold is
+//! proven, and the optimum search runs for the best risky plan in what is left of the budget.
+//! Either way [`SkillPlan::decided`] says the feasibility is known even if that second search
+//! runs out. [`Search::Optimum`] is the single search, kept as the baseline.
+//!
 //! **Order and ties.** Candidates of a side for a grasp are ordered stance-major (blob order
 //! of the stances); within a stance, skills learned at this location type come first, then
 //! the others, each group by the distance of the skill's demonstrated TCP goal to the
@@ -105,6 +117,9 @@ pub struct PlanStats {
     pub grid_integrations: u64,
     /// Candidates answered by a [`Recall`] instead of integrated.
     pub recalled: u32,
+    /// Steps charged to the [`PlanBudget`]: `steps` and those the recalled evaluations took
+    /// when they were integrated (so a plan does not depend on what was planned before it).
+    pub charged: u64,
 }
 
 impl PlanStats {
@@ -112,6 +127,7 @@ impl PlanStats {
     fn count(&mut self, e: &Evaluation) {
         self.integrations += 1;
         self.steps += e.steps() as u64;
+        self.charged += e.steps() as u64;
         match e {
             Evaluation::Pruned { .. } => self.pruned += 1,
             Evaluation::Failed { .. } => self.failed += 1,
@@ -141,6 +157,27 @@ pub struct SkillPlan {
     pub stats: PlanStats,
     /// The budget ran out before the search ended: J* is at least this (m) and at most `j`.
     pub exhausted: Option<f64>,
+    /// J* is at least this, m: `j` when the search ended, the smallest bound of what was not
+    /// searched when the budget ran out, just above the threshold when [`Search::Decide`]
+    /// refuted it, ∞ when no candidate integrates at all.
+    pub lower: f64,
+    /// Whether `feasible` is proven: a plan within the threshold was found, or J* is known to
+    /// exceed it (`lower` above it), even if `exhausted`.
+    pub decided: bool,
+}
+
+/// How SkillPlan-PTT searches (see the module): both give the same plan when J* is within
+/// the risk threshold and the budget lasts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Search {
+    /// Prove or refute J* ≤ threshold first, then search the optimum only if it is refuted.
+    #[default]
+    DecideFirst,
+    /// Only prove or refute J* ≤ threshold: a refuted task has no plan, and `lower` just
+    /// above the threshold (what an envelope needs).
+    Decide,
+    /// The optimum search alone (the baseline).
+    Optimum,
 }
 
 /// How much work one task's skill planning may do.
@@ -154,6 +191,9 @@ pub struct PlanBudget {
 impl PlanBudget {
     /// No limit.
     pub const UNLIMITED: PlanBudget = PlanBudget { steps: u64::MAX };
+    /// The host tools' default: 2,000,000 steps, 1–2 s on one core, enough to decide the
+    /// example cell's tasks with their parts a few millimetres off ([`Search::DecideFirst`]).
+    pub const HOST: PlanBudget = PlanBudget { steps: 2_000_000 };
 }
 
 /// What an arm motion candidate came to.
@@ -764,9 +804,9 @@ type Best = Option<(f64, u8, u16, ArmTiming)>;
 
 /// min over the side's candidates of r for grasp `grasp`, counting only candidates with
 /// r < `bound`; the first candidate in order wins ties. Candidates whose [`Side::bound`]
-/// reaches the limit are not integrated. Stops when `stats.steps` reaches `budget` (before or
-/// within an integration); the flag says it did. Candidates `recall` decides are not
-/// integrated either.
+/// reaches the limit are not integrated. Stops when `stats.charged` reaches `budget` (before
+/// or within an integration); the flag says it did. Candidates `recall` decides are not
+/// integrated either, but charged the steps they took.
 fn side_minimum(
     rt: &Runtime<'_>,
     side: &Side<'_>,
@@ -785,7 +825,7 @@ fn side_minimum(
             stats.bounded += 1;
             return true;
         }
-        if stats.steps >= budget {
+        if stats.charged >= budget {
             exhausted = true;
             return false;
         }
@@ -797,13 +837,16 @@ fn side_minimum(
         };
         let arm_base = &side.arm_bases[s as usize];
         let candidate = Candidate::new(side.location_type, k, arm_base, goal);
-        let e = match recall.as_deref().and_then(|r| r.get(&candidate, limit)) {
+        let left = budget - stats.charged;
+        let recalled = recall.as_deref().and_then(|r| r.get(&candidate, limit));
+        let e = match recalled.filter(|e| e.steps() as u64 <= left) {
             Some(e) => {
                 stats.recalled += 1;
+                stats.charged += e.steps() as u64;
                 e
             }
             None => {
-                let cap = (budget - stats.steps).min(usize::MAX as u64) as usize;
+                let cap = left.min(usize::MAX as u64) as usize;
                 let e = evaluate_arm_motion(rt, &rdmp, goal, &side.field, arm_base, limit, cap);
                 stats.count(&e);
                 if let Some(r) = recall.as_deref_mut() {
@@ -837,24 +880,58 @@ pub fn plan_skills(rt: &Runtime<'_>, sides: &PttSides<'_>) -> Result<SkillPlan, 
     plan_skills_within(rt, sides, PlanBudget::UNLIMITED, None)
 }
 
-/// SkillPlan-PTT within `budget`: the optimum of the brute-force grid when the budget lasts;
-/// otherwise the best plan found and a lower bound of J* ([`SkillPlan::exhausted`]). Without
-/// a budget, `recall` answers the candidates it holds and keeps the others' evaluations (see
-/// [`crate::recall`]); with one, it is not used.
+/// SkillPlan-PTT within `budget`, searched as the runtime's [`Search`] says: the optimum of
+/// the brute-force grid when the budget lasts; otherwise the best plan found and a lower bound
+/// of J* ([`SkillPlan::exhausted`]). `recall` answers the candidates it holds and keeps the
+/// others' evaluations (see [`crate::recall`]); a recalled evaluation is charged the steps it
+/// took, so the plan is the one planned alone.
 pub fn plan_skills_within(
     rt: &Runtime<'_>,
     sides: &PttSides<'_>,
     budget: PlanBudget,
-    recall: Option<&mut Recall<'_>>,
+    mut recall: Option<&mut Recall<'_>>,
 ) -> Result<SkillPlan, SkillPlanError> {
-    let mut recall = recall.filter(|_| budget == PlanBudget::UNLIMITED);
     let (pick, place) = (&sides.pick, &sides.place);
-    let mut stats = PlanStats {
+    let stats = PlanStats {
         grid_integrations: 2
             * (pick.arm_bases.len() * place.arm_bases.len() * sides.grasps) as u64
             * (pick.skills.len() * place.skills.len()) as u64,
         ..PlanStats::default()
     };
+    let threshold = rt.config.risk_threshold;
+    let optimum = |stats, recall| search(rt, sides, f64::INFINITY, budget, stats, recall);
+    let decide = |stats, recall| search(rt, sides, threshold.next_up(), budget, stats, recall);
+    let mut plan = match rt.config.search {
+        Search::Optimum => optimum(stats, recall)?,
+        Search::Decide => decide(stats, recall)?,
+        Search::DecideFirst => {
+            let first = decide(stats, recall.as_deref_mut())?;
+            if first.choice.is_some() || first.exhausted.is_some() {
+                first
+            } else {
+                // J* > threshold: the best risky plan, searched with what the budget has left.
+                let mut second = optimum(first.stats, recall)?;
+                second.lower = second.lower.max(first.lower);
+                second.exhausted = second.exhausted.map(|lower| lower.max(first.lower));
+                second
+            }
+        }
+    };
+    plan.decided = plan.feasible || plan.lower > threshold;
+    Ok(plan)
+}
+
+/// The grasp loop of SkillPlan-PTT: the least J below `limit` (∞: the optimum), counting
+/// onto `stats`, within `budget` steps in all.
+fn search(
+    rt: &Runtime<'_>,
+    sides: &PttSides<'_>,
+    limit: f64,
+    budget: PlanBudget,
+    mut stats: PlanStats,
+    mut recall: Option<&mut Recall<'_>>,
+) -> Result<SkillPlan, SkillPlanError> {
+    let (pick, place) = (&sides.pick, &sides.place);
     // J of each grasp is at least the larger of its sides' smallest bounds.
     let grasp_bound = |g: usize| pick.grasp_bound(g).max(place.grasp_bound(g));
     // Grasps by bound (then index): the most promising first. The tie order is kept by the
@@ -870,7 +947,7 @@ pub fn plan_skills_within(
     let mut best: Option<Plan> = None;
     let mut exhausted = None;
     for (i, &(lower, g)) in order.iter().enumerate() {
-        let bound = best.map_or(f64::INFINITY, |b| {
+        let bound = best.map_or(limit, |b| {
             if g < b.1.grasp as usize {
                 b.0.next_up()
             } else {
@@ -928,5 +1005,8 @@ pub fn plan_skills_within(
         feasible: j <= rt.config.risk_threshold,
         stats,
         exhausted,
+        // Searched to the end: J* is the best found, or at least the limit if none beat it.
+        lower: exhausted.unwrap_or(j.min(limit)),
+        decided: false,
     })
 }

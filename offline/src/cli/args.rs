@@ -2,10 +2,61 @@
 //! and a blob loaded into the runtime with errors that name the file.
 
 use anyhow::{Context, bail};
+use prf_runtime::skill_plan::PlanBudget;
 use prf_runtime::{Runtime, RuntimeConfig};
 use prf_sim::tasks::FloorTask;
 use prf_sim::world::World;
 use std::path::{Path, PathBuf};
+
+/// How skill planning searches ([`prf_runtime::skill_plan::Search`]).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SearchArg {
+    /// Prove or refute J* ≤ threshold first; the optimum only when refuted.
+    #[default]
+    DecideFirst,
+    /// Only prove or refute J* ≤ threshold (a refuted task has no plan to show).
+    Decide,
+    /// The optimum search alone (the baseline).
+    Optimum,
+}
+
+impl From<SearchArg> for prf_runtime::skill_plan::Search {
+    fn from(s: SearchArg) -> Self {
+        match s {
+            SearchArg::DecideFirst => Self::DecideFirst,
+            SearchArg::Decide => Self::Decide,
+            SearchArg::Optimum => Self::Optimum,
+        }
+    }
+}
+
+/// How much skill planning may do per task, and how it searches.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PlanningArgs {
+    /// Planning budget per task, RDMP integration steps, 0 for none. When it runs out the
+    /// answer is the best plan found and a lower bound of J*: risky when that bound is above
+    /// the threshold, otherwise not decided.
+    #[arg(long, default_value_t = PlanBudget::HOST.steps)]
+    pub budget_steps: u64,
+    /// How each task is searched: decide-first proves or refutes risk ≤ threshold before it
+    /// looks for the least risky plan; optimum is the single search it replaced (the baseline).
+    #[arg(long, value_enum, default_value_t)]
+    pub search: SearchArg,
+}
+
+impl PlanningArgs {
+    /// The runtime settings these give, on top of `config`.
+    pub fn config(&self, config: RuntimeConfig) -> RuntimeConfig {
+        RuntimeConfig {
+            plan_budget: match self.budget_steps {
+                0 => PlanBudget::UNLIMITED,
+                steps => PlanBudget { steps },
+            },
+            search: self.search.into(),
+            ..config
+        }
+    }
+}
 
 /// One task of the floor plan: a part from one location to another.
 #[derive(clap::Args, Debug, Clone, Default)]

@@ -1,12 +1,12 @@
 //! `prf envelope`: the part-pose envelope of a task ([`prf_offline::envelope`]) as a table
 //! per yaw, a CSV of every offset and a map (SVG and PNG).
 
-use crate::cli::args::{TaskArgs, WorldArgs, read_blob, runtime};
+use crate::cli::args::{SearchArg, TaskArgs, WorldArgs, read_blob, runtime};
 use crate::cli::progress::Bar;
 use anyhow::{Context, bail};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use prf_offline::envelope::{Cell, Grid, Outcome, map, safe_square};
+use prf_offline::envelope::{Cell, Grid, Options, Outcome, map, safe_square};
 use prf_offline::plots::{self, Chart};
 use prf_runtime::skill_plan::PlanBudget;
 use prf_sim::tasks::{FloorTask, world_tasks};
@@ -61,11 +61,21 @@ pub struct Args {
         default_value = "-10,-5,0,5,10"
     )]
     pub yaw_deg: Vec<f64>,
-    /// Planning budget per offset, RDMP steps: an offset that spends it without a risk-0 plan
-    /// is shown as not known to be safe (a shifted goal may need 1.6 M steps: many candidates
-    /// fail or miss their goal before one reaches it).
-    #[arg(long, default_value_t = 2_000_000)]
+    /// Planning budget per offset, RDMP steps, 0 for none (the default: every offset is
+    /// decided, the search being finite). An offset that spends it undecided is shown as
+    /// not known to be safe.
+    #[arg(long, default_value_t = 0)]
     pub budget_steps: u64,
+    /// How each offset is searched: decide only proves or refutes risk 0 (risky offsets get
+    /// no J); decide-first also finds the least risky plan of a risky offset; optimum is
+    /// the baseline.
+    #[arg(long, value_enum, default_value = "decide")]
+    pub search: SearchArg,
+    /// Execute every safe offset's program and measure it against the true cell of the
+    /// moved part (the world file's boxes and floor): arm, gripper, held part and drives must
+    /// keep r. The command fails, naming the offsets, if one does not.
+    #[arg(long)]
+    pub check: bool,
     /// Output directory (envelope.csv, envelope.svg, envelope.png; with --all one of each
     /// per task and side, named after them, and summary.csv).
     #[arg(short, long, default_value = "target/prf-envelope")]
@@ -81,6 +91,9 @@ struct Summary {
     task: String,
     side: String,
     yaws: Vec<(usize, usize, Option<f64>)>,
+    /// With --check: the safe offsets checked, their smallest true clearance (m), and the
+    /// offsets that did not keep r.
+    truth: Option<(usize, f64, Vec<String>)>,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
@@ -102,8 +115,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     };
     if !a.all {
         let ft = a.task.required(&world)?;
-        envelope(a, &world, &bytes, &ft, a.at, &grid, &a.out.join("envelope"))?;
-        return Ok(());
+        let s = envelope(a, &world, &bytes, &ft, a.at, &grid, &a.out.join("envelope"))?;
+        return verdict(&[s], world.clearance.acceptable);
     }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let mut summaries = Vec::new();
@@ -133,6 +146,46 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     prf_files::atomic::write(&csv, summary_csv(&summaries, &grid))
         .with_context(|| format!("writing {}", csv.display()))?;
     println!("wrote {}", csv.display());
+    verdict(&summaries, world.clearance.acceptable)
+}
+
+/// With --check: one line over every task and side checked, and an error naming the offsets
+/// whose programs came closer than r.
+fn verdict(summaries: &[Summary], r: f64) -> anyhow::Result<()> {
+    let checked: Vec<_> = summaries
+        .iter()
+        .filter_map(|s| s.truth.as_ref().map(|t| (s, t)))
+        .collect();
+    if checked.is_empty() {
+        return Ok(());
+    }
+    let n: usize = checked.iter().map(|(_, t)| t.0).sum();
+    let min = checked
+        .iter()
+        .map(|(_, t)| t.1)
+        .fold(f64::INFINITY, f64::min);
+    let failed: Vec<String> = checked
+        .iter()
+        .flat_map(|(s, t)| {
+            t.2.iter()
+                .map(move |f| format!("{} {}: {f}", s.task, s.side))
+        })
+        .collect();
+    if summaries.len() > 1 {
+        println!(
+            "true cell, every task and side: {n} risk-0 programs executed, smallest clearance {:.1} mm (r = {:.0} mm)",
+            min * 1e3,
+            r * 1e3
+        );
+    }
+    if !failed.is_empty() {
+        bail!(
+            "{} risk-0 programs do not keep r = {:.0} mm in the true cell:\n  {}",
+            failed.len(),
+            r * 1e3,
+            failed.join("\n  ")
+        );
+    }
     Ok(())
 }
 
@@ -153,12 +206,15 @@ fn envelope(
     };
     let n = grid.offsets().len().pow(2) * grid.yaws.len();
     println!(
-        "task {}: the part pose at every {kind} (here {location}) moved by up to ±{:.0} mm in x and y (step {:.0} mm) and turned by {:?}°; {n} plans, budget {} steps each",
+        "task {}: the part pose at every {kind} (here {location}) moved by up to ±{:.0} mm in x and y (step {:.0} mm) and turned by {:?}°; {n} plans, {}",
         ft.label(),
         a.range_mm,
         a.step_mm,
         a.yaw_deg,
-        a.budget_steps
+        match a.budget_steps {
+            0 => "each searched to the end".to_string(),
+            n => format!("budget {n} steps each"),
+        }
     );
     let bar = Bar::new("planning", "offsets", false);
     bar.report(prf_files::Progress::Total(n as u64));
@@ -168,13 +224,21 @@ fn envelope(
         kind,
         (&ft.part.0, &ft.from.0, &ft.to.0),
         grid,
-        PlanBudget {
-            steps: a.budget_steps,
+        Options {
+            budget: match a.budget_steps {
+                0 => PlanBudget::UNLIMITED,
+                steps => PlanBudget { steps },
+            },
+            search: a.search.into(),
+            check: a.check,
         },
         &|| bar.inc(),
     )?;
     bar.finish();
     print_tables(&cells, grid);
+    let truth = a
+        .check
+        .then(|| check_report(&cells, world.clearance.acceptable));
     if let Some(dir) = stem.parent() {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
@@ -201,10 +265,49 @@ fn envelope(
     );
     let yaws = grid.yaws.iter().map(|&yaw| tally(&cells, yaw)).collect();
     Ok(Summary {
+        truth,
         task: ft.label(),
         side: format!("{} ({kind})", end.side()),
         yaws,
     })
+}
+
+/// The safe offsets' programs against the true cell: how many were checked, the smallest
+/// clearance, and each offset that did not keep `r` (or could not be executed); printed.
+fn check_report(cells: &[Cell], r: f64) -> (usize, f64, Vec<String>) {
+    let (mut n, mut min, mut failed) = (0, f64::INFINITY, Vec::new());
+    for c in cells {
+        let at = format!(
+            "({:+.1}, {:+.1}) mm {:+.1}°",
+            c.dx * 1e3,
+            c.dy * 1e3,
+            c.dyaw.to_degrees()
+        );
+        match &c.truth {
+            None => {}
+            Some(Ok(t)) => {
+                n += 1;
+                min = min.min(t.min());
+                if !t.keeps(r) {
+                    failed.push(format!(
+                        "{at}: arm {:.1} mm ({}), held part {:.1} mm, drives {:.1} mm",
+                        t.arm * 1e3,
+                        t.arm_contact,
+                        t.held * 1e3,
+                        t.drives * 1e3
+                    ));
+                }
+            }
+            Some(Err(e)) => failed.push(format!("{at}: {e}")),
+        }
+    }
+    println!(
+        "true cell: {n} risk-0 programs executed, smallest clearance {:.1} mm (r = {:.0} mm), {} below r",
+        min * 1e3,
+        r * 1e3,
+        failed.len()
+    );
+    (n, min, failed)
 }
 
 /// The safe square, m, as the summary shows it: "±x mm", or "–" when the nominal pose is not
@@ -250,7 +353,7 @@ fn summary_csv(summaries: &[Summary], grid: &Grid) -> String {
 fn symbol(o: &Outcome) -> char {
     match o {
         Outcome::Safe => '●',
-        Outcome::Risky(_) => '·',
+        Outcome::Risky { .. } => '·',
         Outcome::Unknown(_) => '?',
         Outcome::NoPlan => 'x',
     }
@@ -297,25 +400,33 @@ fn print_tables(cells: &[Cell], grid: &Grid) {
 }
 
 fn to_csv(cells: &[Cell]) -> String {
-    let mut s = String::from("dx_mm,dy_mm,dyaw_deg,outcome,j_mm,j_lower_mm,integrations,steps\n");
+    let mut s = String::from(
+        "dx_mm,dy_mm,dyaw_deg,outcome,j_mm,j_lower_mm,integrations,steps,true_clearance_mm\n",
+    );
     for c in cells {
         let (name, j, lower) = match c.outcome {
             Outcome::Safe => ("safe", Some(0.0), Some(0.0)),
-            Outcome::Risky(j) => ("risky", Some(j), Some(j)),
+            Outcome::Risky { j, lower } => {
+                ("risky", Some(j).filter(|j| j.is_finite()), Some(lower))
+            }
             Outcome::Unknown(l) => ("budget", None, Some(l)),
             Outcome::NoPlan => ("no_plan", None, None),
         };
         let mm = |v: Option<f64>| v.map_or(String::new(), |v| format!("{:.3}", v * 1e3));
         let _ = writeln!(
             s,
-            "{:.1},{:.1},{:.2},{name},{},{},{},{}",
+            "{:.1},{:.1},{:.2},{name},{},{},{},{},{}",
             c.dx * 1e3,
             c.dy * 1e3,
             c.dyaw.to_degrees(),
             mm(j),
             mm(lower),
             c.integrations,
-            c.steps
+            c.steps,
+            mm(c.truth
+                .as_ref()
+                .and_then(|t| t.as_ref().ok())
+                .map(|t| t.min()))
         );
     }
     s
@@ -362,7 +473,7 @@ impl Chart for EnvelopeMap<'_> {
             chart.draw_series(self.cells.iter().filter(|c| c.dyaw == yaw).map(|c| {
                 let colour = match c.outcome {
                     Outcome::Safe => RGBColor(46, 160, 67),
-                    Outcome::Risky(_) => RGBColor(240, 140, 30),
+                    Outcome::Risky { .. } => RGBColor(240, 140, 30),
                     Outcome::Unknown(_) => RGBColor(170, 170, 170),
                     Outcome::NoPlan => RGBColor(200, 40, 40),
                 };

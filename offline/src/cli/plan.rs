@@ -1,14 +1,14 @@
 //! `prf plan`: plan a task (or all tasks of the floor plan) with the no_std runtime on a blob,
 //! print the choice, and optionally export the program at 1 kHz.
 
-use crate::cli::args::{TaskArgs, WorldArgs, read_blob, runtime};
+use crate::cli::args::{PlanningArgs, TaskArgs, WorldArgs, read_blob, runtime};
 use anyhow::{Context, bail};
 use prf_files::dataset::trajectory_csv;
 use prf_runtime::executor::planar;
 use prf_runtime::plan::{Plan, PlanError, Planner, plan};
 use prf_runtime::program::Program;
 use prf_runtime::recall::HOST_SLOTS;
-use prf_runtime::skill_plan::{MAX_TIME_SCALE, PlanBudget};
+use prf_runtime::skill_plan::MAX_TIME_SCALE;
 use prf_runtime::{Runtime, RuntimeConfig};
 use prf_shared::motion::Param;
 use prf_sim::navigation::{PartTracker, drive_phases, execute_navigating, part_size};
@@ -58,10 +58,9 @@ pub struct Args {
     /// a risk-0 plan guarantees).
     #[arg(long)]
     pub clearance: Option<f64>,
-    /// Planning budget per task, RDMP integration steps (default: unlimited). When it runs
-    /// out the answer is the best plan found and a lower bound of J*.
-    #[arg(long)]
-    pub budget_steps: Option<u64>,
+    /// Planning budget and search.
+    #[command(flatten)]
+    pub planning: PlanningArgs,
 }
 
 /// What a risk-0 plan on this blob guarantees (Sec. 4.1): every sphere inside Ω+ is within
@@ -90,13 +89,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let world = a.world.load()?;
     let bytes = read_blob(&a.blob)?;
     let t0 = Instant::now();
-    let config = RuntimeConfig {
+    let config = a.planning.config(RuntimeConfig {
         risk_threshold: a.threshold,
-        plan_budget: a
-            .budget_steps
-            .map_or(PlanBudget::UNLIMITED, |steps| PlanBudget { steps }),
         ..RuntimeConfig::default()
-    };
+    });
     let rt = runtime(&bytes, &a.blob, config)?;
     let load = t0.elapsed();
     println!(
@@ -264,10 +260,10 @@ fn print_plan(rt: &Runtime<'_>, ft: &FloorTask, p: &Plan, took: f64) -> anyhow::
     let s = &p.skills;
     println!("task {}", ft.label());
     println!("  action plan: {}", actions.join(", "));
-    let class = if s.feasible {
-        "physically feasible"
-    } else {
-        "symbolically feasible, physically infeasible"
+    let class = match (s.feasible, s.decided) {
+        (true, _) => "physically feasible",
+        (false, true) => "symbolically feasible, physically infeasible",
+        (false, false) => "symbolically feasible, physical feasibility not decided",
     };
     println!(
         "  {class}: J* = {} (r_pick {}, r_place {}; threshold {})",
@@ -276,10 +272,15 @@ fn print_plan(rt: &Runtime<'_>, ft: &FloorTask, p: &Plan, took: f64) -> anyhow::
         mm(s.r_place),
         mm(rt.config.risk_threshold)
     );
-    if let Some(lower) = s.exhausted {
+    if s.exhausted.is_some() {
+        let verdict = if s.decided {
+            "risky (proven)"
+        } else {
+            "not decided"
+        };
         println!(
-            "  risky: J* ≥ {} after {} integrations: the planning budget of {} steps ran out (the plan below is the best found, J = {})",
-            mm(lower),
+            "  {verdict}: J* ≥ {} after {} integrations: the planning budget of {} steps ran out (the plan below is the best found, J = {}; --budget-steps 0 searches to the end)",
+            mm(s.lower),
             s.stats.integrations,
             rt.config.plan_budget.steps,
             mm(s.j)
@@ -381,7 +382,11 @@ fn plan_all(rt: &Runtime<'_>, world: &World) -> anyhow::Result<()> {
                     "{:>2}  {:<24} {:<10} {:>9}  {:>7} {:>7} {:>5}  {:>5} {:>5}  {:>5} {:>6}  {:>6} {:>6} {:>9}  {:>8.1}",
                     i,
                     ft.label(),
-                    if s.feasible { "feasible" } else { "risky" },
+                    match (s.feasible, s.decided) {
+                        (true, _) => "feasible",
+                        (false, true) => "risky",
+                        (false, false) => "undecided",
+                    },
                     s.exhausted
                         .map_or_else(|| mm(s.j), |l| format!("≥{}", mm(l))),
                     f(c.map(|c| c.stance_from.to_string())),

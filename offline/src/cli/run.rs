@@ -1,7 +1,7 @@
 //! `prf run`: plan one task with the runtime and execute it in real time on the host cell,
 //! against a running `firmware-sim` (or one started for the run with `--spawn-firmware`).
 
-use crate::cli::args::{PacingArgs, TaskArgs, WorldArgs, read_blob, runtime};
+use crate::cli::args::{PacingArgs, PlanningArgs, TaskArgs, WorldArgs, read_blob, runtime};
 use crate::cli::child::{ChildGuard, spawn_firmware};
 use anyhow::{Context, bail};
 use prf_host::cell::{Cell, CellConfig, CellReport};
@@ -49,19 +49,32 @@ pub struct Args {
     /// answers again with the arm at rest, and complete the task (one attempt).
     #[arg(long)]
     pub auto_recover: bool,
+    /// Planning budget and search.
+    #[command(flatten)]
+    pub planning: PlanningArgs,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let world = a.world.load()?;
     let bytes = read_blob(&a.blob)?;
-    let rt = runtime(&bytes, &a.blob, Default::default())?;
+    let rt = runtime(&bytes, &a.blob, a.planning.config(Default::default()))?;
     let ft = a.task.required(&world)?;
     let p = plan(&rt, &ft.task()).map_err(|e| anyhow::anyhow!("task {}: {e}", ft.label()))?;
     let (Some(program), true) = (&p.program, p.skills.feasible) else {
+        let s = &p.skills;
+        if !s.decided {
+            bail!(
+                "task {}: no risk-0 plan found within the planning budget of {} steps (J* ≥ {:.1} mm, best found {:.1} mm); nothing to run (--budget-steps 0 searches to the end)",
+                ft.label(),
+                rt.config.plan_budget.steps,
+                s.lower * 1e3,
+                s.j * 1e3
+            );
+        }
         bail!(
-            "task {}: physically infeasible (J* = {:.1} mm); nothing to run",
+            "task {}: physically infeasible (J* ≥ {:.1} mm); nothing to run",
             ft.label(),
-            p.skills.j * 1e3
+            s.lower * 1e3
         );
     };
     let _child = if a.spawn_firmware {
