@@ -98,7 +98,9 @@ pub fn true_clearance(
 ) -> anyhow::Result<TrueClearance> {
     let cell = Cell::new(world, &rt.model);
     let (arm, arm_contact) = arm_clearance(rt, &cell, ft, plan)?;
-    let program = plan.program.as_ref().expect("arm_clearance checked it");
+    let Some(program) = &plan.program else {
+        anyhow::bail!("{}: no program", ft.label());
+    };
     let (run, _) = execute_navigating(world, rt, program, ft, MAX_TICKS)
         .map_err(|e| anyhow::anyhow!("{}: the drives: {e:?}", ft.label()))?;
     let part = || PartTracker::new(part_size(world, &ft.part.1), ft.part_pose);
