@@ -48,13 +48,18 @@ impl PlanningArgs {
     /// The runtime settings these give, on top of `config`.
     pub fn config(&self, config: RuntimeConfig) -> RuntimeConfig {
         RuntimeConfig {
-            plan_budget: match self.budget_steps {
-                0 => PlanBudget::UNLIMITED,
-                steps => PlanBudget { steps },
-            },
+            plan_budget: budget(self.budget_steps),
             search: self.search.into(),
             ..config
         }
+    }
+}
+
+/// The planning budget of a `--budget-steps` flag: 0 is none.
+pub fn budget(steps: u64) -> PlanBudget {
+    match steps {
+        0 => PlanBudget::UNLIMITED,
+        steps => PlanBudget { steps },
     }
 }
 

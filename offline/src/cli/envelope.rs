@@ -1,14 +1,13 @@
 //! `prf envelope`: the part-pose envelope of a task ([`prf_offline::envelope`]) as a table
 //! per yaw, a CSV of every offset and a map (SVG and PNG).
 
-use crate::cli::args::{SearchArg, TaskArgs, WorldArgs, read_blob, runtime};
+use crate::cli::args::{SearchArg, TaskArgs, WorldArgs, budget, read_blob, runtime};
 use crate::cli::progress::Bar;
 use anyhow::{Context, bail};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use prf_offline::envelope::{Cell, Grid, Options, Outcome, map, safe_square};
 use prf_offline::plots::{self, Chart};
-use prf_runtime::skill_plan::PlanBudget;
 use prf_sim::tasks::{FloorTask, world_tasks};
 use prf_sim::world::World;
 use std::fmt::Write as _;
@@ -91,9 +90,16 @@ struct Summary {
     task: String,
     side: String,
     yaws: Vec<(usize, usize, Option<f64>)>,
-    /// With --check: the safe offsets checked, their smallest true clearance (m), and the
-    /// offsets that did not keep r.
-    truth: Option<(usize, f64, Vec<String>)>,
+    /// With --check: the safe offsets' programs against the true cell.
+    truth: Option<Checked>,
+}
+
+/// Safe offsets' programs executed in the true cell: how many, their smallest clearance (m),
+/// and each offset that did not keep r (or could not be executed).
+struct Checked {
+    programs: usize,
+    min: f64,
+    failed: Vec<String>,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
@@ -159,15 +165,16 @@ fn verdict(summaries: &[Summary], r: f64) -> anyhow::Result<()> {
     if checked.is_empty() {
         return Ok(());
     }
-    let n: usize = checked.iter().map(|(_, t)| t.0).sum();
+    let n: usize = checked.iter().map(|(_, t)| t.programs).sum();
     let min = checked
         .iter()
-        .map(|(_, t)| t.1)
+        .map(|(_, t)| t.min)
         .fold(f64::INFINITY, f64::min);
     let failed: Vec<String> = checked
         .iter()
         .flat_map(|(s, t)| {
-            t.2.iter()
+            t.failed
+                .iter()
                 .map(move |f| format!("{} {}: {f}", s.task, s.side))
         })
         .collect();
@@ -225,10 +232,7 @@ fn envelope(
         (&ft.part.0, &ft.from.0, &ft.to.0),
         grid,
         Options {
-            budget: match a.budget_steps {
-                0 => PlanBudget::UNLIMITED,
-                steps => PlanBudget { steps },
-            },
+            budget: budget(a.budget_steps),
             search: a.search.into(),
             check: a.check,
         },
@@ -272,9 +276,8 @@ fn envelope(
     })
 }
 
-/// The safe offsets' programs against the true cell: how many were checked, the smallest
-/// clearance, and each offset that did not keep `r` (or could not be executed); printed.
-fn check_report(cells: &[Cell], r: f64) -> (usize, f64, Vec<String>) {
+/// The safe offsets' programs against the true cell, measured against `r`; printed.
+fn check_report(cells: &[Cell], r: f64) -> Checked {
     let (mut n, mut min, mut failed) = (0, f64::INFINITY, Vec::new());
     for c in cells {
         let at = format!(
@@ -307,7 +310,11 @@ fn check_report(cells: &[Cell], r: f64) -> (usize, f64, Vec<String>) {
         r * 1e3,
         failed.len()
     );
-    (n, min, failed)
+    Checked {
+        programs: n,
+        min,
+        failed,
+    }
 }
 
 /// The safe square, m, as the summary shows it: "±x mm", or "–" when the nominal pose is not

@@ -63,12 +63,16 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let (Some(program), true) = (&p.program, p.skills.feasible) else {
         let s = &p.skills;
         if !s.decided {
+            let best = if s.j.is_finite() {
+                format!("the best found has J = {:.1} mm", s.j * 1e3)
+            } else {
+                "none found yet".into()
+            };
             bail!(
-                "task {}: no risk-0 plan found within the planning budget of {} steps (J* ≥ {:.1} mm, best found {:.1} mm); nothing to run (--budget-steps 0 searches to the end)",
+                "task {}: no risk-0 plan found within the planning budget of {} steps (J* ≥ {:.1} mm; {best}); nothing to run (--budget-steps 0 searches to the end)",
                 ft.label(),
                 rt.config.plan_budget.steps,
-                s.lower * 1e3,
-                s.j * 1e3
+                s.lower * 1e3
             );
         }
         bail!(
