@@ -2,7 +2,7 @@
 //! ≥ r from every box the demonstrations kept r_d from), checked by executing the program and
 //! measuring the arm, gripper, held part and platform against the world file's boxes and floor.
 
-use prf_host::ideal::execute;
+use prf_host::ideal::{Execution, execute};
 use prf_runtime::Runtime;
 use prf_runtime::executor::{ExecutorConfig, Mode, planar};
 use prf_runtime::plan::Plan;
@@ -45,6 +45,21 @@ impl TrueClearance {
     }
 }
 
+/// An error unless `run` went to the program's end without a fault: a check of part of a
+/// program proves nothing about the rest.
+fn completed(ft: &FloorTask, run: &Execution) -> anyhow::Result<()> {
+    if let Some(fault) = run.fault {
+        anyhow::bail!("{}: the program faulted: {fault:?}", ft.label());
+    }
+    if run.setpoints.last().map(|s| s.mode) != Some(Mode::Done) {
+        anyhow::bail!(
+            "{}: the program did not end within {MAX_TICKS} ticks",
+            ft.label()
+        );
+    }
+    Ok(())
+}
+
 /// The arm motions of `plan`'s program (executed on the ideal cell) against `cell`: the
 /// smallest clearance of arm and gripper at any tick, and what it was to.
 pub fn arm_clearance(
@@ -61,9 +76,7 @@ pub fn arm_clearance(
         .stances
         .ok_or_else(|| anyhow::anyhow!("{}: no stances", ft.label()))?;
     let run = execute(rt, program, &ft.home, ExecutorConfig::default(), MAX_TICKS);
-    if let Some(fault) = run.fault {
-        anyhow::bail!("{}: the program faulted: {fault:?}", ft.label());
-    }
+    completed(ft, &run)?;
     let mut worst = (f64::INFINITY, String::new());
     for (i, seg) in program.segments.iter().enumerate() {
         if !matches!(seg, Segment::Arm { .. } | Segment::Reverse { .. }) {
@@ -103,6 +116,7 @@ pub fn true_clearance(
     };
     let (run, _) = execute_navigating(world, rt, program, ft, MAX_TICKS)
         .map_err(|e| anyhow::anyhow!("{}: the drives: {e:?}", ft.label()))?;
+    completed(ft, &run)?;
     let part = || PartTracker::new(part_size(world, &ft.part.1), ft.part_pose);
     let drives = drive_phases(&cell, &run.samples, part())
         .iter()
