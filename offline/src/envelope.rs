@@ -5,7 +5,7 @@
 
 use crate::ground_truth::{TrueClearance, true_clearance};
 use prf_runtime::plan::plan;
-use prf_runtime::skill_plan::{PlanBudget, Search};
+use prf_runtime::skill_plan::{PlanBudget, Search, SkillPlan};
 use prf_runtime::{Runtime, RuntimeConfig};
 use prf_sim::tasks::{FloorTask, FloorTaskError};
 use prf_sim::world::World;
@@ -23,6 +23,24 @@ pub enum Outcome {
     Unknown(f64),
     /// No plan at all (nothing integrates, or the task is refused).
     NoPlan,
+}
+
+impl Outcome {
+    /// What a skill plan says of its offset.
+    pub fn of(s: &SkillPlan) -> Self {
+        if s.feasible {
+            Outcome::Safe
+        } else if !s.decided {
+            Outcome::Unknown(s.lower)
+        } else if s.lower == f64::INFINITY {
+            Outcome::NoPlan
+        } else {
+            Outcome::Risky {
+                j: s.j,
+                lower: s.lower,
+            }
+        }
+    }
 }
 
 /// One offset of the grid and its outcome.
@@ -128,19 +146,7 @@ pub fn map(
                 (Ok(rt), Ok(ft)) => match plan(&rt, &ft.task()) {
                     Ok(p) => {
                         let s = &p.skills;
-                        let outcome = if s.feasible {
-                            Outcome::Safe
-                        } else if !s.decided {
-                            Outcome::Unknown(s.lower)
-                        } else if s.lower == f64::INFINITY {
-                            Outcome::NoPlan
-                        } else {
-                            Outcome::Risky {
-                                j: s.j,
-                                lower: s.lower,
-                            }
-                        };
-                        let mut c = cell(outcome, s.stats.integrations, s.stats.steps);
+                        let mut c = cell(Outcome::of(s), s.stats.integrations, s.stats.steps);
                         if options.check && c.outcome == Outcome::Safe {
                             c.truth = Some(
                                 true_clearance(&w, &rt, &ft, &p).map_err(|e| format!("{e:#}")),
