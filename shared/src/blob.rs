@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 /// Magic at the start of every blob.
 pub const MAGIC: [u8; 8] = *b"PRFBLOB\0";
 /// Format version this build reads and writes.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 /// Header bytes: magic (8), version (4), payload length (4), CRC-32 (4), reserved (4).
 pub const HEADER_LEN: usize = 24;
 /// Maximum affordances (stances of a location type, grasps of a part type).

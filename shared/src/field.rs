@@ -8,15 +8,20 @@
 //!   (centre as an offset from the node in [`OFFSET_UNIT`] steps, radius in mm), or
 //! - a **scalar** upper bound of the signed distance at the node (mm, rounded up).
 //!
-//! A few **certificate balls** per cell (sorted by cell) add the demonstrated spheres that
-//! the node features alone would not certify, so every demonstrated configuration is inside.
+//! A few **certificates** per cell (sorted by cell, each naming one of the field's capsules)
+//! add the demonstrated spheres that the node features alone would not certify, so every
+//! demonstrated configuration is inside. A capsule is the set within R of a segment [a, b]:
+//! the swept path of one robot sphere, straight within a fraction of a millimetre, dilated by
+//! ε less that deviation (a ball when a = b). One capsule stands for the dozens of
+//! demonstrated balls along it, and the cells its spheres reach share it.
 //!
 //! Lookup at x takes the minimum over the 8 corner nodes of the cell containing x (a feature
 //! ball contributes its own signed distance |x − b| − R; a scalar s at node v contributes the
-//! 1-Lipschitz bound s + |x − v|) and over the cell's certificate balls. Every term is an
-//! upper bound of the true signed distance of Ω+ (each ball lies inside Ω+), so the field is
-//! **conservative**: it never reports a point deeper inside Ω+ than it is. Quantization keeps
-//! this: offsets round to the nearest step and radii are shrunk by the rounding error.
+//! 1-Lipschitz bound s + |x − v|) and over the cell's certificate capsules (dist(x, [a, b]) −
+//! R). Every term is an upper bound of the true signed distance of Ω+ (each ball and capsule
+//! lies inside Ω+), so the field is **conservative**: it never reports a point deeper inside
+//! Ω+ than it is. Quantization keeps this: offsets round to the nearest step and radii are
+//! shrunk by the rounding error.
 //!
 //! Points outside the grid get d(p) + |x − p| with p the nearest point of the grid box.
 
@@ -31,15 +36,24 @@ pub const BRICK_NODES: usize = BRICK * BRICK * BRICK;
 pub const NODE_BYTES: usize = 4;
 /// Feature-ball centre offsets are stored in steps of this size, m (range ±127 steps).
 pub const OFFSET_UNIT: f64 = 0.002;
-/// Radii, scalar values and certificate-ball coordinates are stored in mm.
+/// Radii and scalar values are stored in mm.
 pub const MM: f64 = 0.001;
+/// Certificate-capsule coordinates and radii are stored in steps of this size, m (a quarter
+/// millimetre: a capsule's rounding costs the reuse margin about half a millimetre; the
+/// coordinates span ±8.19 m of the location frame).
+pub const CERT_UNIT: f64 = 0.000_25;
 /// Brick map entries at or above this are uniform bricks with value (entry − UNIFORM) mm.
 pub const UNIFORM: u16 = 0x8000;
 /// Margin kept from a cell's faces by the anchored lookup's first test, m: far above the
 /// rounding of a point's cell coordinates (≈ 1e-15 m in a grid of metres).
 pub const FACE_MARGIN: f64 = 1e-9;
-/// Bytes per certificate ball: cell u32, centre i16×3 (mm, location frame), radius u16 mm.
-pub const CERT_BYTES: usize = 12;
+/// Bytes per certificate: cell u32, capsule index u16.
+pub const CERT_BYTES: usize = 6;
+/// Bytes per capsule: end a i16×3, end b i16×3 (location frame) and radius u16, each in
+/// [`CERT_UNIT`] steps.
+pub const CAPSULE_BYTES: usize = 14;
+/// Most capsules a field holds (the certificates' u16 index).
+pub const MAX_CAPSULES: usize = u16::MAX as usize + 1;
 
 /// A conservative signed distance field: never below the true signed distance (negative
 /// inside the set).
@@ -135,9 +149,12 @@ pub struct FieldData<'a> {
     /// Stored bricks, [`BRICK_NODES`] nodes of [`NODE_BYTES`] each, x-major inside a brick.
     #[serde(borrow)]
     pub nodes: &'a [u8],
-    /// Certificate balls, [`CERT_BYTES`] each, sorted by cell index.
+    /// Certificates, [`CERT_BYTES`] each, sorted by cell index.
     #[serde(borrow)]
     pub certificates: &'a [u8],
+    /// The capsules the certificates name, [`CAPSULE_BYTES`] each.
+    #[serde(borrow)]
+    pub capsules: &'a [u8],
 }
 
 /// Why field data was refused.
@@ -152,7 +169,7 @@ pub enum FieldError {
         /// Index of the brick map entry.
         brick: usize,
     },
-    /// Certificate balls not sorted by cell, or a cell outside the grid.
+    /// Certificates not sorted by cell, a cell outside the grid, or a missing capsule.
     Certificates,
 }
 
@@ -170,7 +187,7 @@ impl core::fmt::Display for FieldError {
             ),
             FieldError::Certificates => write!(
                 f,
-                "workspace field certificates are not sorted by cell or lie outside the grid"
+                "workspace field certificates are not sorted by cell, lie outside the grid or name a capsule that is not there"
             ),
         }
     }
@@ -193,6 +210,7 @@ pub struct Field<'a> {
     bricks: &'a [u8],
     nodes: &'a [u8],
     certificates: &'a [u8],
+    capsules: &'a [u8],
     /// Whether lookups may be settled by their hint's anchor (see [`Hint`]).
     anchored: bool,
     /// Whether [`DistanceField::settled_within`] gives any room.
@@ -209,6 +227,21 @@ fn ball_bound(x: &Vector3<f64>, b: &Vector3<f64>, r: f64, stop: f64) -> f64 {
         stop
     } else {
         crate::float::sqrt(d2) - r
+    }
+}
+
+/// The point of segment [a, b] nearest to x (a when a = b).
+#[inline]
+pub fn nearest_on_segment(x: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
+    let e = b - a;
+    let ee = e.norm_squared();
+    let t = (x - a).dot(&e);
+    if t <= 0.0 || ee == 0.0 {
+        *a
+    } else if t >= ee {
+        *b
+    } else {
+        a + e * (t / ee)
     }
 }
 
@@ -233,6 +266,8 @@ impl<'a> Field<'a> {
         if d.bricks.len() != 2 * n_bricks
             || !d.nodes.len().is_multiple_of(BRICK_NODES * NODE_BYTES)
             || !d.certificates.len().is_multiple_of(CERT_BYTES)
+            || !d.capsules.len().is_multiple_of(CAPSULE_BYTES)
+            || d.capsules.len() > MAX_CAPSULES * CAPSULE_BYTES
         {
             return Err(FieldError::Length);
         }
@@ -244,10 +279,12 @@ impl<'a> Field<'a> {
             }
         }
         let cells: usize = dims.iter().map(|n| n - 1).product();
+        let capsules = d.capsules.len() / CAPSULE_BYTES;
         let mut last = 0u32;
         for c in d.certificates.chunks_exact(CERT_BYTES) {
             let cell = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
-            if cell < last || cell as usize >= cells {
+            let capsule = u16::from_le_bytes([c[4], c[5]]) as usize;
+            if cell < last || cell as usize >= cells || capsule >= capsules {
                 return Err(FieldError::Certificates);
             }
             last = cell;
@@ -269,6 +306,7 @@ impl<'a> Field<'a> {
             bricks: d.bricks,
             nodes: d.nodes,
             certificates: d.certificates,
+            capsules: d.capsules,
             anchored: true,
             travelled: true,
         })
@@ -294,11 +332,12 @@ impl<'a> Field<'a> {
         self.dims
     }
 
-    /// Number of stored bricks and of certificate balls.
-    pub fn counts(&self) -> (usize, usize) {
+    /// Number of stored bricks, of certificates and of capsules.
+    pub fn counts(&self) -> (usize, usize, usize) {
         (
             self.nodes.len() / (BRICK_NODES * NODE_BYTES),
             self.certificates.len() / CERT_BYTES,
+            self.capsules.len() / CAPSULE_BYTES,
         )
     }
 
@@ -339,7 +378,7 @@ impl<'a> Field<'a> {
         }
     }
 
-    /// Number of certificate balls.
+    /// Number of certificates.
     fn certificate_count(&self) -> usize {
         self.certificates.len() / CERT_BYTES
     }
@@ -364,13 +403,23 @@ impl<'a> Field<'a> {
         lo
     }
 
-    /// Term of certificate ball `i` at `x` (`stop` as in [`Field::node_bound`]).
+    /// Term of certificate `i` at `x`, dist(x, [a, b]) − R of its capsule (`stop` as in
+    /// [`Field::node_bound`]).
     fn certificate_bound(&self, i: usize, x: &Vector3<f64>, stop: f64) -> f64 {
         let c = &self.certificates[i * CERT_BYTES..(i + 1) * CERT_BYTES];
-        let v = |o: usize| i16::from_le_bytes([c[o], c[o + 1]]) as f64 * MM;
-        let centre = Vector3::new(v(4), v(6), v(8));
-        let r = u16::from_le_bytes([c[10], c[11]]) as f64 * MM;
-        ball_bound(x, &centre, r, stop)
+        let (a, b, r) = self.capsule(u16::from_le_bytes([c[4], c[5]]) as usize);
+        ball_bound(x, &nearest_on_segment(x, &a, &b), r, stop)
+    }
+
+    /// Capsule `i` (< count): its ends a and b and its radius, m.
+    pub fn capsule(&self, i: usize) -> (Vector3<f64>, Vector3<f64>, f64) {
+        let c = &self.capsules[i * CAPSULE_BYTES..(i + 1) * CAPSULE_BYTES];
+        let v = |o: usize| i16::from_le_bytes([c[o], c[o + 1]]) as f64 * CERT_UNIT;
+        (
+            Vector3::new(v(0), v(2), v(4)),
+            Vector3::new(v(6), v(8), v(10)),
+            u16::from_le_bytes([c[12], c[13]]) as f64 * CERT_UNIT,
+        )
     }
 
     /// Cell containing the grid-box point with grid coordinates `g`.

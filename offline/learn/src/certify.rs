@@ -4,7 +4,10 @@
 //! Within one cell the lookup is a minimum of 1-Lipschitz terms (its 8 corner nodes), so a
 //! sphere whose centre c satisfies (terms of cell C at c) + r ≤ −m is certified for every
 //! centre within m of c in C. Each cell the margin ball around c touches is checked; where
-//! it fails, the sphere's own ball B(c, r + ε) becomes a certificate of that cell.
+//! it fails, the capsule of the piece of path the sphere lies on ([`crate::capsule`]; radius
+//! r + ε less the piece's deviation) becomes a certificate of that cell, and if even that
+//! leaves the sphere uncertified, its own ball B(c, r + ε). One capsule certifies the
+//! dozens of spheres along its piece, so a wide margin costs few certificates.
 //!
 //! A cell's certificates depend only on its corner nodes and on the spheres touching it, in
 //! order. So the next build of a sweep ([`Certified`]) re-decides only the cells one of whose
@@ -13,11 +16,16 @@
 //! sweep recovers these decisions from its field ([`Certified::recover`]); which of its
 //! spheres touch a cell is found when the cell is decided anew.
 
+use crate::capsule::Capsule;
 use crate::in_file::Spheres;
 use crate::workspace::{LearnedField, SphereSample, WorkspaceConfig};
 use nalgebra::Vector3;
-use prf_shared::field::{BRICK, BRICK_NODES, CERT_BYTES, Field, Hint, MM, NODE_BYTES, UNIFORM};
+use prf_shared::field::{
+    BRICK, BRICK_NODES, CAPSULE_BYTES, CERT_BYTES, CERT_UNIT, Field, Hint, MAX_CAPSULES,
+    NODE_BYTES, UNIFORM, nearest_on_segment,
+};
 use rayon::prelude::*;
+use std::collections::HashMap;
 
 /// How a node is encoded: its brick's uniform value (true), or its own bytes (false).
 pub type NodeToken = (bool, [u8; NODE_BYTES]);
@@ -83,9 +91,9 @@ pub struct Certified {
     grid: ([f32; 3], f32, [u16; 3]),
     tokens: Vec<NodeToken>,
     /// Per cell: the spheres (indices, ascending) whose margin ball touches it, and its
-    /// certificate balls (mm-quantized centre, radius).
+    /// certificate capsules (as quantized).
     spheres: Vec<Vec<u32>>,
-    balls: Vec<Vec<(Vector3<f64>, f64)>>,
+    balls: Vec<Vec<Cert>>,
     /// Spheres decided (a prefix of the sweep's, which only grows).
     done: usize,
     /// Spheres left out of the lists by a recovery, if any.
@@ -113,16 +121,13 @@ impl Certified {
         let mut balls = vec![Vec::new(); n_cells];
         for r in learned.certificates.chunks_exact(CERT_BYTES) {
             let cell = u32::from_le_bytes([r[0], r[1], r[2], r[3]]) as usize;
-            let k = |o: usize| i16::from_le_bytes([r[o], r[o + 1]]);
-            let centre = [k(4), k(6), k(8)];
-            if centre.iter().any(|v| *v == i16::MIN || *v == i16::MAX) {
+            let (a, b, r) = field.capsule(u16::from_le_bytes([r[4], r[5]]) as usize);
+            // An end at the edge of the records' range may have been clamped there.
+            let edge = (i16::MAX - 1) as f64 * CERT_UNIT;
+            if a.iter().chain(b.iter()).any(|v| v.abs() > edge) {
                 return None;
             }
-            let radius = u16::from_le_bytes([r[10], r[11]]);
-            balls.get_mut(cell)?.push((
-                Vector3::from(centre.map(|v| v as f64 * MM)),
-                radius as f64 * MM,
-            ));
+            balls.get_mut(cell)?.push(Cert { a, b, r });
         }
         Some(Certified {
             grid: learned.grid(),
@@ -177,16 +182,18 @@ struct Unlisted {
     listed: Vec<bool>,
 }
 
-/// The certificate records (cell, centre and radius in mm) of `learned`, whose certificates
-/// must still be empty, for the demonstrated `spheres`; `last` is what the previous build of
-/// the same sweep decided (its spheres a prefix of these), or None. Returns the records and
-/// what this build decided, for the next.
+/// The certificate records ([`prf_shared::field::CERT_BYTES`]) of `learned`, whose
+/// certificates must still be empty, for the demonstrated `spheres` and the pieces of path
+/// `capsules` they name; `last` is what the previous build of the same sweep decided (its
+/// spheres a prefix of these), or None. Returns the records and what this build decided, for
+/// the next.
 pub fn certificates(
     learned: &LearnedField,
     spheres: &Spheres,
+    capsules: &[Capsule],
     last: Option<Certified>,
     cfg: &WorkspaceConfig,
-) -> (Vec<u8>, Certified) {
+) -> ((Vec<u8>, Vec<u8>), Certified) {
     debug_assert!(learned.certificates.is_empty());
     let field = learned.field();
     let [nx, ny, nz] = field.dims();
@@ -217,7 +224,7 @@ pub fn certificates(
     } else {
         vec![false; n_cells]
     };
-    let decide = Decide::new(field, cfg);
+    let decide = Decide::new(field, capsules, cfg);
     c.list_before_unlisted(&decide, &redo, spheres);
     let old: Vec<usize> = c.spheres.iter().map(Vec::len).collect();
     decide.list(&mut c.spheres, spheres, c.done);
@@ -241,33 +248,101 @@ pub fn certificates(
         );
     c.done = spheres.len();
     c.tokens = tokens;
-    let mut out = Vec::new();
-    for (cell, list) in c.balls.iter().enumerate() {
-        let cell = cell as u32;
-        for (c, r) in list {
-            out.extend_from_slice(&cell.to_le_bytes());
-            for v in c.iter() {
-                out.extend_from_slice(&(((v / MM).round()) as i16).to_le_bytes());
-            }
-            out.extend_from_slice(&((r / MM).round() as u16).to_le_bytes());
+    (records(&c.balls), c)
+}
+
+/// The certificates (cell, capsule index) of the cells' capsules `balls`, and the capsules,
+/// each stored once, in the order of first use. Beyond [`MAX_CAPSULES`] a capsule is not
+/// stored and the certificates naming it are left out: the field stays conservative, and the
+/// spheres they certified rate a risk (a location type that needs more capsules than the
+/// u16 index holds learns with a smaller margin).
+fn records(balls: &[Vec<Cert>]) -> (Vec<u8>, Vec<u8>) {
+    let (mut certificates, mut capsules) = (Vec::new(), Vec::new());
+    let mut index: HashMap<[i64; 7], u16> = HashMap::new();
+    for (cell, list) in balls.iter().enumerate() {
+        for k in list {
+            let key = k.steps();
+            let next = index.len();
+            let i = match index.get(&key) {
+                Some(i) => *i,
+                None if next < MAX_CAPSULES => {
+                    for v in &key[..6] {
+                        capsules.extend_from_slice(&(*v as i16).to_le_bytes());
+                    }
+                    capsules.extend_from_slice(&(key[6] as u16).to_le_bytes());
+                    index.insert(key, next as u16);
+                    next as u16
+                }
+                None => continue,
+            };
+            certificates.extend_from_slice(&(cell as u32).to_le_bytes());
+            certificates.extend_from_slice(&i.to_le_bytes());
         }
     }
-    debug_assert_eq!(out.len() % CERT_BYTES, 0);
-    (out, c)
+    debug_assert_eq!(certificates.len() % CERT_BYTES, 0);
+    debug_assert_eq!(capsules.len() % CAPSULE_BYTES, 0);
+    (certificates, capsules)
+}
+
+/// A certificate capsule as the field stores it: ends and radius on the [`CERT_UNIT`] grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Cert {
+    a: Vector3<f64>,
+    b: Vector3<f64>,
+    r: f64,
+}
+
+impl Cert {
+    /// The capsule of radius `r` around [a, b] quantized conservatively: the ends rounded to
+    /// the grid (the segment moves at most as far as its farther end), the radius shrunk by
+    /// that and rounded down. None when an end is outside the records' range or nothing is
+    /// left of the radius.
+    fn quantized(a: &Vector3<f64>, b: &Vector3<f64>, r: f64) -> Option<Self> {
+        let limit = (i16::MAX - 1) as f64;
+        let grid = |v: &Vector3<f64>| {
+            let q = v.map(|x| (x / CERT_UNIT).round());
+            q.iter().all(|x| x.abs() <= limit).then_some(q * CERT_UNIT)
+        };
+        let (qa, qb) = (grid(a)?, grid(b)?);
+        let moved = (qa - a).norm().max((qb - b).norm());
+        let r = ((r - moved) / CERT_UNIT).floor() * CERT_UNIT;
+        (r > 0.0 && r / CERT_UNIT <= u16::MAX as f64).then_some(Cert { a: qa, b: qb, r })
+    }
+
+    /// Ends and radius in [`CERT_UNIT`] steps.
+    fn steps(&self) -> [i64; 7] {
+        let s = |v: f64| (v / CERT_UNIT).round() as i64;
+        [
+            s(self.a.x),
+            s(self.a.y),
+            s(self.a.z),
+            s(self.b.x),
+            s(self.b.y),
+            s(self.b.z),
+            s(self.r),
+        ]
+    }
+
+    /// dist(x, [a, b]) − r.
+    fn distance(&self, x: &Vector3<f64>) -> f64 {
+        (x - nearest_on_segment(x, &self.a, &self.b)).norm() - self.r
+    }
 }
 
 /// The decision for one sphere in one cell, on an encoded field without certificates.
 #[derive(Clone, Copy)]
 struct Decide<'a> {
     field: Field<'a>,
+    capsules: &'a [Capsule],
     cfg: &'a WorkspaceConfig,
     hint: Hint,
 }
 
 impl<'a> Decide<'a> {
-    fn new(field: Field<'a>, cfg: &'a WorkspaceConfig) -> Self {
+    fn new(field: Field<'a>, capsules: &'a [Capsule], cfg: &'a WorkspaceConfig) -> Self {
         Decide {
             field,
+            capsules,
             cfg,
             hint: Hint::default(),
         }
@@ -310,16 +385,10 @@ impl<'a> Decide<'a> {
         }
     }
 
-    /// Decides sphere `s` in cell `cell` after the certificate balls `balls` of the spheres
-    /// before it: certified by the cell's terms or one of those balls with the margin, or
-    /// its own ball B(c, r + ε) — mm-quantized, the radius shrunk by the rounding error — is
-    /// added.
-    fn sphere_in_cell(
-        &mut self,
-        s: &SphereSample,
-        cell: usize,
-        balls: &mut Vec<(Vector3<f64>, f64)>,
-    ) {
+    /// Decides sphere `s` in cell `cell` after the certificates `balls` of the spheres before
+    /// it: certified by the cell's terms or one of those with the margin; or the capsule of its
+    /// piece of path is added, and if that does not certify it, its own ball B(c, r + ε).
+    fn sphere_in_cell(&mut self, s: &SphereSample, cell: usize, balls: &mut Vec<Cert>) {
         let m = self.cfg.certify_margin;
         let certified = |d: f64| d + s.radius <= -m;
         let c = self.cell(cell);
@@ -330,16 +399,23 @@ impl<'a> Decide<'a> {
         if !certified(d) {
             d = self.field.distance_in_cell(c, &s.centre);
         }
-        for (c, rr) in balls.iter() {
+        for k in balls.iter() {
             if certified(d) {
                 return;
             }
-            d = d.min((s.centre - c).norm() - rr);
+            d = d.min(k.distance(&s.centre));
         }
-        if !certified(d) {
-            let q = s.centre.map(|v| (v / MM).round() * MM);
-            let r = (((s.radius + self.cfg.epsilon) - (q - s.centre).norm()) / MM).floor() * MM;
-            balls.push((q, r));
+        if certified(d) {
+            return;
+        }
+        let dilated = s.radius + self.cfg.epsilon;
+        if let Some(piece) = self.capsules.get(s.capsule as usize)
+            && let Some(k) = Cert::quantized(&piece.a, &piece.b, dilated - piece.loss)
+            && certified(k.distance(&s.centre))
+        {
+            balls.push(k);
+        } else if let Some(k) = Cert::quantized(&s.centre, &s.centre, dilated) {
+            balls.push(k);
         }
     }
 }

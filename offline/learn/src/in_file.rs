@@ -326,6 +326,7 @@ mod tests {
         SphereSample {
             centre: Vector3::new(v(), v(), v()),
             radius: rng.random_range(0.01..0.2),
+            capsule: rng.random_range(0..1000),
         }
     }
 

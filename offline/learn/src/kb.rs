@@ -18,6 +18,7 @@
 //! postcard: the file grows by appending instead of being rewritten whole, and loading replays
 //! the additions.
 
+use crate::capsule::Capsule;
 use crate::workspace::{SeenKey, SphereSample, SweptPath};
 use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
 use prf_shared::NA;
@@ -35,8 +36,9 @@ pub const MAGIC: [u8; 6] = *b"PRF-KB";
 /// The layout this build writes and reads (2: the swept spheres, their keys and the splat as
 /// byte strings of `Record`s; 3: additions may follow the base; 4: each location type's sweep
 /// in a section of its own, after the core; 5: a program's fingerprint covers its task, not
-/// only its trajectory, [`crate::learn::fingerprint`]).
-pub const VERSION: u32 = 5;
+/// only its trajectory, [`crate::learn::fingerprint`]; 6: each swept sphere names the piece
+/// of its path it lies on, [`crate::capsule`]).
+pub const VERSION: u32 = 6;
 /// Magic, version, base length, core length, core CRC-32.
 pub const HEADER: usize = 6 + 4 + 8 + 8 + 4;
 /// A sweep section's or an addition's length (u64 LE) and CRC-32 (u32 LE).
@@ -337,6 +339,9 @@ pub(crate) struct AffordanceState {
 pub(crate) struct SweepState<'a> {
     #[serde(borrow)]
     pub spheres: RecordBytes<'a, SphereSample>,
+    /// The pieces of path the spheres lie on ([`crate::capsule`]).
+    #[serde(borrow)]
+    pub capsules: RecordBytes<'a, Capsule>,
     #[serde(borrow)]
     pub seen: RecordBytes<'a, SeenKey>,
     pub feature_spacing: f64,
@@ -559,15 +564,32 @@ fn put_f64s<'a>(out: &mut [u8], values: impl IntoIterator<Item = &'a f64>) {
 /// Centre x, y, z and radius: decoded straight into the sweep's own type (no second copy of
 /// the example cell's 38 MB of swept spheres).
 impl Record for SphereSample {
-    const SIZE: usize = 32;
+    const SIZE: usize = 36;
     fn put(&self, out: &mut [u8]) {
         put_f64s(out, self.centre.iter().chain([&self.radius]));
+        out[32..36].copy_from_slice(&self.capsule.to_le_bytes());
     }
     fn get(b: &[u8]) -> Self {
-        let [x, y, z, radius] = words(b, f64::from_le_bytes);
+        let [x, y, z, radius] = words(&b[..32], f64::from_le_bytes);
         SphereSample {
             centre: Vector3::new(x, y, z),
             radius,
+            capsule: u32::from_le_bytes([b[32], b[33], b[34], b[35]]),
+        }
+    }
+}
+
+impl Record for Capsule {
+    const SIZE: usize = 56;
+    fn put(&self, out: &mut [u8]) {
+        put_f64s(out, self.a.iter().chain(self.b.iter()).chain([&self.loss]));
+    }
+    fn get(b: &[u8]) -> Self {
+        let [ax, ay, az, bx, by, bz, loss] = words(b, f64::from_le_bytes);
+        Capsule {
+            a: Vector3::new(ax, ay, az),
+            b: Vector3::new(bx, by, bz),
+            loss,
         }
     }
 }

@@ -1224,14 +1224,22 @@ fn check_state(st: &crate::kb::LearnerState) -> Result<(), crate::kb::KbError> {
 }
 
 /// Why a location type's sweep in a knowledge base is refused, if it is: a swept sphere or
-/// feature ball not finite within 100 m or with a radius outside (0, 1] m, or a feature
-/// spacing other than the settings'.
+/// feature ball not finite within 100 m or with a radius outside (0, 1] m, a piece of path
+/// not within 100 m or one a sphere names that is not there, or a feature spacing other
+/// than the settings'.
 fn check_sweep(s: &crate::kb::SweepState<'_>, w: &WorkspaceConfig) -> Result<(), String> {
     let ball = |(c, r): &([f64; 3], f64)| within_100_m(c) && *r > 0.0 && *r <= 1.0;
     let sample = |x: &workspace::SphereSample| ball(&(x.centre.into(), x.radius));
     // The example cell's Table holds 338 k spheres: checked on every core.
     if !s.spheres.all(sample) || !s.features.iter().all(ball) {
         return Err("holds a swept sphere out of range".into());
+    }
+    let capsules = s.capsules.len() as u32;
+    let piece = |k: &crate::capsule::Capsule| {
+        within_100_m(&k.a.into()) && within_100_m(&k.b.into()) && (0.0..=1.0).contains(&k.loss)
+    };
+    if !s.spheres.all(|x| x.capsule < capsules) || !s.capsules.all(piece) {
+        return Err("holds a piece of path out of range".into());
     }
     if s.feature_spacing != w.feature_spacing {
         return Err(format!(

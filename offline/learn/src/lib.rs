@@ -4,7 +4,7 @@
 //!   [`prf_shared::motion::CLASSES`];
 //! - [`kb`]: the knowledge base, a learner's whole state on disk, for `prf learn --add`;
 //! - [`affordance`]: stances and grasps with tolerance;
-//! - [`workspace`] (+ [`edt`], [`certify`], [`in_file`]): Ω+ per location type as a conservative distance field;
+//! - [`workspace`] (+ [`edt`], [`capsule`], [`certify`], [`in_file`]): Ω+ per location type as a conservative distance field;
 //! - [`exact`]: the reference Ω+ (its dilated balls, searched exhaustively) the field is measured against;
 //! - [`skills`]: TrainRDMP on arm motions, the skill sets and share();
 //! - [`compile`](mod@compile): Learn's output → the blob ([`prf_shared::blob`]);
@@ -38,6 +38,7 @@
 //! ```
 
 pub mod affordance;
+pub mod capsule;
 pub mod certify;
 pub mod compile;
 pub mod edt;

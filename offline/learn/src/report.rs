@@ -85,14 +85,14 @@ pub fn report(bytes: &[u8]) -> Result<String, ReportError> {
         match &t.workspace {
             Some(d) => {
                 let f = Field::new(d)?;
-                let b = d.bricks.len() + d.nodes.len() + d.certificates.len();
+                let b = d.bricks.len() + d.nodes.len() + d.certificates.len() + d.capsules.len();
                 field_bytes += b;
                 let dims = f.dims();
-                let (stored, certs) = f.counts();
+                let (stored, certs, capsules) = f.counts();
                 writeln!(
                     o,
                     "; workspace {}×{}×{} nodes at {:.0} mm ({:.2}×{:.2}×{:.2} m), {} of {} \
-                     bricks stored, {} certificate balls, {}",
+                     bricks stored, {} certificates of {} capsules, {}",
                     dims[0],
                     dims[1],
                     dims[2],
@@ -103,6 +103,7 @@ pub fn report(bytes: &[u8]) -> Result<String, ReportError> {
                     stored,
                     d.bricks.len() / 2,
                     certs,
+                    capsules,
                     kib(b)
                 )?;
             }

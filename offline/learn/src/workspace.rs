@@ -18,6 +18,7 @@
 //!    certificate in the cells around it, so every demonstrated configuration, and every one
 //!    whose spheres lie within the margin of it, has risk 0.
 
+use crate::capsule::{self, Capsule};
 use crate::certify::{self, Certified};
 use crate::edt;
 use crate::in_file::{Seen, Spheres, ordinal_of};
@@ -31,7 +32,8 @@ use prf_shared::field::{
 use prf_shared::kinematics::Chain;
 use prf_shared::robot::{MAX_SPHERES, RobotModel};
 use prf_shared::se3::Pose;
-use rustc_hash::FxHashSet;
+use rayon::prelude::*;
+use rustc_hash::{FxHashMap, FxHashSet};
 use std::collections::HashSet;
 use std::ops::Range;
 
@@ -83,19 +85,22 @@ impl WorkspaceConfig {
 /// within 8 mm of where it was, so a part placed some millimetres off still plans at risk 0.
 /// It sizes the blob: with the 100 mm voxel, the example cell's workspaces take about twice
 /// what 1 mm with a 50 mm voxel took.
-pub const REUSE_MARGIN: f64 = 0.008;
+pub const REUSE_MARGIN: f64 = 0.017;
 
-/// What a sphere's own certificate ball can lose to its mm rounding at the sphere's centre, m:
-/// the centre's rounding (up to √3/2 mm) twice (the centre moves, and the radius shrinks by
-/// as much) and the radius rounded down (1 mm), rounded up.
-pub const ROUNDING: f64 = 0.003;
+/// What a sphere's own certificate ball can lose to its rounding at the sphere's centre, m:
+/// the centre's rounding to the [`prf_shared::field::CERT_UNIT`] grid (up to √3/2 of half a
+/// step) twice (the centre moves, and the radius shrinks by as much) and the radius rounded
+/// down (a step), rounded up.
+pub const ROUNDING: f64 = 0.0005;
 
 /// A robot sphere at a demonstrated configuration, in the location frame: centre and radius
-/// r_j (the ball of Ω+ around it has radius r_j + ε).
+/// r_j (the ball of Ω+ around it has radius r_j + ε), and the piece of its path it lies on
+/// (an index into [`Sweep::capsules`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SphereSample {
     pub centre: Vector3<f64>,
     pub radius: f64,
+    pub capsule: u32,
 }
 
 /// A robot sphere of a swept configuration: its centre in the location frame and its index
@@ -112,6 +117,8 @@ pub struct PathSphere {
 #[derive(Clone, Debug)]
 pub struct Sweep {
     pub spheres: Spheres,
+    /// The pieces of the demonstrated paths the spheres lie on ([`crate::capsule`]).
+    pub capsules: Vec<Capsule>,
     /// The [`SeenKey`]s of `spheres`.
     seen: Seen,
     /// Feature-ball spacing, m ([`WorkspaceConfig::feature_spacing`]).
@@ -138,6 +145,7 @@ impl Sweep {
     pub fn new(feature_spacing: f64) -> Self {
         Sweep {
             spheres: Spheres::default(),
+            capsules: Vec::new(),
             seen: Seen::default(),
             feature_spacing,
             features: Vec::new(),
@@ -165,6 +173,7 @@ impl Sweep {
         let v = |p: &Vector3<f64>| [p.x, p.y, p.z];
         crate::kb::SweepState {
             spheres: self.spheres.to_records(),
+            capsules: RecordBytes::written(&[], &self.capsules),
             seen: self.seen.to_records(),
             feature_spacing: self.feature_spacing,
             features: self.features.iter().map(|(c, r)| (v(c), *r)).collect(),
@@ -255,6 +264,7 @@ impl Sweep {
         let v = |p: [f64; 3]| Vector3::new(p[0], p[1], p[2]);
         let mut sweep = Sweep {
             spheres: Spheres::of(&s.spheres, file),
+            capsules: s.capsules.decoded(),
             seen: Seen::of(&s.seen, file),
             feature_spacing: s.feature_spacing,
             // Derived: one key per feature ball (a ball is kept iff its key is new).
@@ -303,23 +313,50 @@ impl Sweep {
         let keys: Vec<SeenKey> = fresh.iter().map(|e| e.0).collect();
         // Re-visited configurations (the reversal, repeated programs) add nothing new.
         fresh.sort_unstable_by_key(|e| e.1);
-        let mut p = 0;
+        let path_of = |i: u32| starts.partition_point(|s| *s <= i) - 1;
+        // The pieces of each path's new spheres, on every core; a piece is kept when a new
+        // sphere names it, in the order of the first such sphere.
+        let mut touched: Vec<(usize, Vec<u32>)> = Vec::new();
+        for &(_, i) in &fresh {
+            let p = path_of(i);
+            if touched.last().is_none_or(|t| t.0 != p) {
+                touched.push((p, Vec::new()));
+            }
+            if let Some(t) = touched.last_mut() {
+                t.1.push(i - starts[p]);
+            }
+        }
+        let cut: Vec<(Vec<u32>, Vec<Capsule>)> = touched
+            .par_iter()
+            .map(|(p, new)| path_capsules(paths[*p], new))
+            .collect();
+        let mut kept: FxHashMap<(usize, u32), u32> = FxHashMap::default();
+        let mut capsules = Vec::new();
         let mut spheres = Vec::with_capacity(fresh.len());
         let from = fresh.iter().map(|e| e.1).collect();
+        let mut at = 0;
         for &(_, i) in &fresh {
-            while starts.get(p + 1).is_some_and(|s| *s <= i) {
-                p += 1;
-            }
-            let s = paths[p].sphere((i - starts[p]) as usize);
-            let radius = model.spheres[s.sphere as usize].radius;
+            let p = path_of(i);
+            let local = i - starts[p];
+            let s = paths[p].sphere(local as usize);
+            at += touched[at..].iter().position(|t| t.0 == p).unwrap_or(0);
+            let (new, (of, pieces)) = (&touched[at].1, &cut[at]);
+            let piece = of[new.partition_point(|n| *n < local)];
+            let next = (self.capsules.len() + capsules.len()) as u32;
+            let capsule = *kept.entry((p, piece)).or_insert_with(|| {
+                capsules.push(pieces[piece as usize]);
+                next
+            });
             spheres.push(SphereSample {
                 centre: s.centre,
-                radius,
+                radius: model.spheres[s.sphere as usize].radius,
+                capsule,
             });
         }
         Fresh {
             keys,
             spheres,
+            capsules,
             from,
         }
     }
@@ -349,6 +386,7 @@ impl Sweep {
     /// thin to. Returns the spheres' indices across the paths.
     fn add_fresh(&mut self, fresh: Fresh) -> Vec<u32> {
         self.seen.insert(&fresh.keys);
+        self.capsules.extend(fresh.capsules);
         for s in &fresh.spheres {
             if self
                 .kept
@@ -366,8 +404,36 @@ impl Sweep {
 struct Fresh {
     keys: Vec<SeenKey>,
     spheres: Vec<SphereSample>,
+    /// The pieces the new spheres lie on, not yet in the sweep's.
+    capsules: Vec<Capsule>,
     /// Each sphere's index across the paths it came from.
     from: Vec<u32>,
+}
+
+/// Per sphere `new` of `path` (indices, ascending), its piece among theirs
+/// ([`capsule::pieces`] of each robot sphere's samples among them, in path order), and the
+/// pieces. Only the spheres new to the sweep are cut: an addition keeps just those of its
+/// paths, and replayed, they are cut alike.
+fn path_capsules(path: &SweptPath, new: &[u32]) -> (Vec<u32>, Vec<Capsule>) {
+    let mut chains: Vec<Vec<usize>> = vec![Vec::new(); u8::MAX as usize + 1];
+    for (n, &i) in new.iter().enumerate() {
+        chains[path.sphere(i as usize).sphere as usize].push(n);
+    }
+    let mut of = vec![0; new.len()];
+    let mut capsules = Vec::new();
+    for chain in chains.iter().filter(|c| !c.is_empty()) {
+        let centres: Vec<Vector3<f64>> = chain
+            .iter()
+            .map(|&n| path.sphere(new[n] as usize).centre)
+            .collect();
+        let (pieces, more) = capsule::pieces(&centres);
+        let base = capsules.len() as u32;
+        for (&n, piece) in chain.iter().zip(pieces) {
+            of[n] = base + piece;
+        }
+        capsules.extend(more);
+    }
+    (of, capsules)
 }
 
 /// The swept spheres of one instance ([`SweptPath::of`]) and, sorted, each of
@@ -873,6 +939,7 @@ pub struct LearnedField {
     pub bricks: Vec<u8>,
     pub nodes: Vec<u8>,
     pub certificates: Vec<u8>,
+    pub capsules: Vec<u8>,
     /// Demonstrated spheres (after de-duplication) and feature balls used.
     pub spheres: usize,
     pub feature_balls: usize,
@@ -887,6 +954,7 @@ impl LearnedField {
             bricks: &self.bricks,
             nodes: &self.nodes,
             certificates: &self.certificates,
+            capsules: &self.capsules,
         }
     }
 
@@ -897,7 +965,7 @@ impl LearnedField {
 
     /// Bytes of the arrays.
     pub fn bytes(&self) -> usize {
-        self.bricks.len() + self.nodes.len() + self.certificates.len()
+        self.bricks.len() + self.nodes.len() + self.certificates.len() + self.capsules.len()
     }
 }
 
@@ -1076,12 +1144,18 @@ pub fn build_field(sweep: &mut Sweep, cfg: &WorkspaceConfig) -> Option<LearnedFi
         bricks,
         nodes,
         certificates: Vec::new(),
+        capsules: Vec::new(),
         spheres: sweep.spheres.len(),
         feature_balls: used.len(),
     };
-    let (records, certified) =
-        certify::certificates(&learned, &sweep.spheres, sweep.certified.take(), cfg);
-    learned.certificates = records;
+    let (records, certified) = certify::certificates(
+        &learned,
+        &sweep.spheres,
+        &sweep.capsules,
+        sweep.certified.take(),
+        cfg,
+    );
+    (learned.certificates, learned.capsules) = records;
     sweep.certified = Some(certified);
     Some(learned)
 }
@@ -1210,6 +1284,7 @@ mod tests {
                 sweep.spheres.push(SphereSample {
                     centre: s.centre,
                     radius,
+                    capsule: 0,
                 });
                 if sweep
                     .kept
@@ -1265,7 +1340,21 @@ mod tests {
                     &p.spheres().collect::<Vec<_>>(),
                 );
             }
-            assert_eq!(sorted.spheres, reference.spheres, "batch {batch}");
+            let ball = |s: SphereSample| (s.centre, s.radius);
+            assert!(
+                sorted
+                    .spheres
+                    .iter()
+                    .map(ball)
+                    .eq(reference.spheres.iter().map(ball)),
+                "batch {batch}"
+            );
+            // Each sphere names a piece of path it lies on.
+            for s in sorted.spheres.iter() {
+                let k = &sorted.capsules[s.capsule as usize];
+                let p = prf_shared::field::nearest_on_segment(&s.centre, &k.a, &k.b);
+                assert!((p - s.centre).norm() <= crate::capsule::TOLERANCE + 1e-12);
+            }
             assert_eq!(sorted.features, reference.features, "batch {batch}");
             let mut keys: Vec<SeenKey> = seen.iter().copied().collect();
             keys.sort_unstable();
@@ -1362,7 +1451,7 @@ mod tests {
     fn the_margin_is_capped_by_epsilon() {
         let cfg = WorkspaceConfig::default();
         assert_eq!(cfg.margin_for(0.02), REUSE_MARGIN);
-        assert!((cfg.margin_for(0.008) - 0.005).abs() < 1e-15);
+        assert!((cfg.margin_for(0.008) - 0.0075).abs() < 1e-15);
         assert_eq!(cfg.margin_for(0.0), 0.001);
     }
 

@@ -41,7 +41,7 @@ pub struct Args {
     pub far: f64,
     /// Every demonstrated sphere is certified with this margin, m: a program whose spheres
     /// stay within it of where the same spheres were demonstrated rates risk 0. Larger: more
-    /// part offsets plan at risk 0, a larger blob. At most ε − 3 mm (and at least 1 mm)
+    /// part offsets plan at risk 0, a larger blob. At most ε − 0.5 mm (and at least 1 mm)
     #[arg(long, default_value_t = prf_learn::workspace::REUSE_MARGIN)]
     pub margin: f64,
     /// Also write the knowledge base (the learner's whole state) to this file, for

@@ -3,15 +3,18 @@
 
 use prf_learn::certify::cells_with_changed_corners;
 use prf_learn::workspace::LearnedField;
-use prf_shared::field::CERT_BYTES;
+use prf_shared::field::{CAPSULE_BYTES, CERT_BYTES};
 use std::collections::{HashMap, HashSet};
 
-/// Certificate records of a field by cell.
+/// The capsules (their records) a field's certificates name, by cell.
 fn certificates_by_cell(f: &LearnedField) -> HashMap<u32, Vec<&[u8]>> {
     let mut out: HashMap<u32, Vec<&[u8]>> = HashMap::new();
     for rec in f.certificates.chunks_exact(CERT_BYTES) {
         let cell = u32::from_le_bytes([rec[0], rec[1], rec[2], rec[3]]);
-        out.entry(cell).or_default().push(rec);
+        let at = u16::from_le_bytes([rec[4], rec[5]]) as usize * CAPSULE_BYTES;
+        out.entry(cell)
+            .or_default()
+            .push(&f.capsules[at..at + CAPSULE_BYTES]);
     }
     out
 }
