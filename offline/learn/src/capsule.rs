@@ -9,9 +9,10 @@
 //! the segment). So the capsule {x : dist(x, [a, b]) ≤ r + ε − h} lies inside ∪ B(c_i, r + ε):
 //! each point of it is within r + ε − h of some p(t), and p(t) within h of some c_i.
 //!
-//! A path is cut in aligned windows of [`WINDOW`] samples of each robot sphere, halved until
-//! each piece deviates at most [`TOLERANCE`]: a sample's capsule depends only on its window,
-//! so adding a path never changes the capsules of another.
+//! The samples of each robot sphere that a path adds to the sweep are cut in aligned windows
+//! of [`WINDOW`], halved until each piece deviates at most [`TOLERANCE`]: a sample's capsule
+//! depends only on its window of that path's new samples, so adding a path never changes the
+//! capsules of another, and an addition replayed from its kept samples cuts them alike.
 
 use nalgebra::Vector3;
 
