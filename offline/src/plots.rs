@@ -113,8 +113,8 @@ fn padded(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
 }
 
 /// Draws the legend of `chart`'s labelled series in a framed box at `position`.
-fn legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+fn legend<'a, DB: DrawingBackend + 'a, Y: Ranged>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
     position: SeriesLabelPosition,
 ) -> Result<()>
 where
@@ -345,15 +345,17 @@ impl Chart for Histogram<'_> {
         DB::ErrorType: 'static,
     {
         let counts = self.counts();
-        let top = counts.iter().flatten().copied().max().unwrap_or(1).max(1);
+        let top = counts.iter().flatten().copied().max().unwrap_or(1).max(1) as u32;
         let width = self.max / self.bins as f64;
+        // The samples' bars side by side within each bin, so none hides another.
+        let bar = width / self.samples.len().max(1) as f64;
         root.fill(&WHITE)?;
         let mut chart = ChartBuilder::on(root)
             .caption(self.title, ("sans-serif", 18))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..self.max, 0.0..top as f64 * 1.08)?;
+            .build_cartesian_2d(0.0..self.max, 0u32..top + top / 12 + 1)?;
         chart
             .configure_mesh()
             .x_desc(self.x_label)
@@ -364,8 +366,8 @@ impl Chart for Histogram<'_> {
             let colour = Palette99::pick(s);
             chart
                 .draw_series(c.iter().enumerate().map(|(b, &n)| {
-                    let x = b as f64 * width;
-                    Rectangle::new([(x, 0.0), (x + width, n as f64)], colour.mix(0.45).filled())
+                    let x = b as f64 * width + s as f64 * bar;
+                    Rectangle::new([(x, 0), (x + bar, n as u32)], colour.mix(0.8).filled())
                 }))?
                 .label(*name)
                 .legend(move |(x, y)| {

@@ -9,7 +9,7 @@ mod common;
 use nalgebra::{SVector, Vector3};
 use prf_learn::skills;
 use prf_offline::experiment::rdmp_vs_dmp::{
-    DMP_REACH, Ending, GoalGrid, REACH_ANGLE, REACH_POSITION, approaches, run_approach,
+    DMP_REACH, Ending, GoalGrid, REACH_ANGLE, REACH_POSITION, approaches, run_approach, tcp_floor,
 };
 use prf_shared::dmp::PositionDmp;
 use prf_shared::kinematics::ArmKinematics;
@@ -83,7 +83,45 @@ fn rdmp_reaches_every_goal_and_the_dmp_its_end_with_the_risks_of_the_shared_rati
             .unwrap();
         let qs: Vec<JointVector> = ys[..n].to_vec();
         assert_eq!(rate(&qs), d.risk, "DMP risk at ({}, {})", g.dx, g.dy);
+
+        // The null-space-shifted RDMP reaches the same goal.
+        let (_, shifted) = g
+            .shifted
+            .as_ref()
+            .expect("a shift for every integrated goal");
+        assert_eq!(
+            shifted.ending,
+            Ending::Reached,
+            "shifted at ({}, {})",
+            g.dx,
+            g.dy
+        );
+        // Every trajectory's exact risk is at least the floor where it ends: the floor is a
+        // lower bound of the true risk, and the exact union's per-ball depth an upper one.
+        for t in [&g.rdmp, shifted, d] {
+            let end = ArmKinematics::new(&model, &JointVector::from(t.end)).tcp;
+            let floor = tcp_floor(&model, &r.exact, &r.arm_base, &end);
+            let exact = t.exact_risk.expect("rated exactly within ±30 mm");
+            assert!(
+                floor <= exact,
+                "floor {floor} > exact risk {exact} at ({}, {})",
+                g.dx,
+                g.dy
+            );
+            // ... and the field, conservative, never rates a trajectory the floor refutes 0.
+            assert!(
+                floor == 0.0 || t.risk > 0.0,
+                "field risk 0 at ({}, {})",
+                g.dx,
+                g.dy
+            );
+        }
     }
+    // The floor proves the corners (42 mm from the demonstrated goal, more than ε = 20 mm)
+    // risky for any motion, and leaves the demonstrated goal open.
+    let at = |dx: f64, dy: f64| r.goals.iter().find(|g| (g.dx, g.dy) == (dx, dy)).unwrap();
+    assert!(at(0.03, 0.03).floor > 0.01, "{}", at(0.03, 0.03).floor);
+    assert_eq!(at(0.0, 0.0).floor, 0.0);
     // The demonstrated goal itself: the RDMP reproduces the demonstration inside Ω+.
     let centre = &r.goals[24];
     assert_eq!((centre.dx, centre.dy), (0.0, 0.0));
@@ -108,7 +146,14 @@ fn the_command_writes_every_chart_and_csvs_that_hold_its_table() {
     );
     let mut charts = Vec::new();
     for approach in ["cnc_front", "cnc_side", "printer_front", "table_side"] {
-        for chart in ["risk_rdmp", "risk_dmp", "histogram", "elbow", "workspace"] {
+        for chart in [
+            "risk_rdmp",
+            "risk_rdmp_shifted",
+            "risk_dmp",
+            "histogram",
+            "elbow",
+            "workspace",
+        ] {
             charts.push(format!("{approach}_{chart}"));
         }
     }

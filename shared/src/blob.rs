@@ -489,6 +489,7 @@ impl<'a> RdmpData<'a> {
         (r.params, r.tau, r.travel) = (params, self.tau, Vector3::from(self.travel));
         (g.params, g.tau) = (params, self.tau);
         out.gamma_goal = self.gamma_goal;
+        out.gamma_shift = 0.0;
         all_finite
     }
 }

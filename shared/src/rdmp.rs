@@ -38,6 +38,11 @@ pub struct Rdmp {
     pub gamma: PositionDmp<1>,
     /// Null-space goal γ_g = γ(t̄), reused unchanged for new goals.
     pub gamma_goal: f64,
+    /// Null-space shift δ (beyond the paper, 0 for its RDMP): the run tracks
+    /// γ_DMP(t) + δ·h(t/τ), h the minimum-jerk ramp from 0 to 1 ([`shift_ramp`]), so the arm
+    /// ends δ along the null space from where the paper's RDMP would leave it. Not learned:
+    /// a plan chooses it per motion ([`Rdmp::shifted`]).
+    pub gamma_shift: f64,
 }
 
 impl Rdmp {
@@ -69,6 +74,7 @@ impl Rdmp {
                 },
             },
             gamma_goal: 0.0,
+            gamma_shift: 0.0,
         }
     }
 }
@@ -259,7 +265,16 @@ impl Rdmp {
             rotation,
             gamma: gamma_dmp,
             gamma_goal: gamma[n - 1],
+            gamma_shift: 0.0,
         })
+    }
+
+    /// The same RDMP with null-space shift δ = `shift` ([`Rdmp::gamma_shift`]).
+    pub fn shifted(&self, shift: f64) -> Self {
+        Rdmp {
+            gamma_shift: shift,
+            ..*self
+        }
     }
 
     /// Demonstrated duration τ, s.
@@ -278,6 +293,30 @@ impl Rdmp {
         r.gamma.tau *= scale;
         r
     }
+}
+
+/// The minimum-jerk ramp h(s) = 10s³ − 15s⁴ + 6s⁵ of s = t/τ clamped to [0, 1]: from 0 to 1
+/// with zero velocity and acceleration at both ends, so a shifted run starts and ends at rest
+/// like the paper's.
+#[inline]
+pub fn shift_ramp(s: f64) -> f64 {
+    let s = s.clamp(0.0, 1.0);
+    s * s * s * (10.0 + s * (6.0 * s - 15.0))
+}
+
+/// The null-space shift that moves a run ending at `end` toward the configuration
+/// `reference` (e.g. the demonstration's last), to first order: Mᵀ(end) · (reference − end),
+/// the part of the difference a self-motion can take up (γ̇ = Mᵀq̇, Eq. 22). Shifting the run
+/// by it ([`Rdmp::shifted`]) leaves the TCP goal as it is. None at a singular `end`.
+pub fn shift_toward(
+    model: &RobotModel,
+    end: &JointVector,
+    reference: &JointVector,
+    min_manipulability: f64,
+) -> Option<f64> {
+    let ker = kernel(&Chain::new(model).kinematics(model, end).jacobian(model));
+    let shift = ker.direction.dot(&(reference - end));
+    (ker.manipulability >= min_manipulability && shift.is_finite()).then_some(shift)
 }
 
 /// One integration step's output: the joint setpoint at step `step`.
@@ -598,7 +637,18 @@ impl RdmpRun {
         if let Some((m0, q0)) = self.previous {
             gamma_measured += gamma_increment(&m0, &ker.direction, &q0, &self.q);
         }
-        let gamma_rate = dmp.g + cfg.gain * (dmp.gamma - gamma_measured);
+        let (target, rate) = if rdmp.gamma_shift != 0.0 {
+            // t/τ at steps k and k + 1 (τ of the position DMP, time-scaled with the others).
+            let at = |k: usize| shift_ramp(k as f64 * cfg.dt / rdmp.position.tau);
+            let (h0, h1) = (at(k), at(k + 1));
+            (
+                dmp.gamma + rdmp.gamma_shift * h0,
+                dmp.g + rdmp.gamma_shift * (h1 - h0) / cfg.dt,
+            )
+        } else {
+            (dmp.gamma, dmp.g)
+        };
+        let gamma_rate = rate + cfg.gain * (target - gamma_measured);
         let qd = pinv.ok_or(RdmpError::Singular {
             step: k,
             manipulability,

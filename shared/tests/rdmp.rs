@@ -6,7 +6,9 @@ use common::{deg, joint_demo};
 use nalgebra::{Isometry3, Translation3, Vector3};
 use prf_shared::dmp::DmpParams;
 use prf_shared::kinematics::{ArmKinematics, Chain};
-use prf_shared::rdmp::{Rdmp, RdmpConfig, RdmpError, RdmpRun, integrate, null_space_coordinate};
+use prf_shared::rdmp::{
+    Rdmp, RdmpConfig, RdmpError, RdmpRun, integrate, null_space_coordinate, shift_toward,
+};
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::{exp, log};
 use prf_shared::{JointVector, NA};
@@ -314,4 +316,73 @@ fn a_run_started_on_reused_bases_steps_as_a_fresh_one() {
         .err(),
         RdmpRun::new(&f.model, &bad, &q0, &goal, &f.cfg).err()
     );
+}
+
+#[test]
+fn a_null_space_shift_moves_the_arm_along_its_self_motion_to_the_reference() {
+    // A goal 5 cm off the demonstrated one; the paper's RDMP ends at q_end. A reference
+    // configuration 0.15 rad along the null space from q_end (same TCP to first order): the
+    // shift toward it is 0.15, and the shifted run ends at the goal, nearer the reference,
+    // with γ measured along its path (Alg. 1, independently) grown by the shift.
+    let f = fixture();
+    let q0 = JointVector::from(f.demo[0]);
+    let demo_goal = tcp(&f.model, &JointVector::from(*f.demo.last().unwrap()));
+    let goal = Isometry3::from_parts(
+        Translation3::from(demo_goal.translation.vector + Vector3::new(0.03, -0.04, 0.0)),
+        demo_goal.rotation,
+    );
+    let run = |rdmp: &Rdmp| {
+        let mut path = vec![<[f64; NA]>::from(q0)];
+        let end = integrate(&f.model, rdmp, &q0, &goal, &f.cfg, |s| {
+            path.push(s.q.into())
+        })
+        .unwrap();
+        (end, path)
+    };
+    let (end, path) = run(&f.rdmp);
+    // Shift 0 is the paper's RDMP, bit for bit.
+    assert_eq!(run(&f.rdmp.shifted(0.0)).1, path);
+    let ker = prf_shared::nullspace::kernel(&ArmKinematics::new(&f.model, &end).jacobian(&f.model));
+    let reference = end + ker.direction * 0.15;
+    let shift = shift_toward(&f.model, &end, &reference, f.cfg.min_manipulability).unwrap();
+    assert!((shift - 0.15).abs() < 1e-12, "{shift}");
+    let (shifted_end, shifted_path) = run(&f.rdmp.shifted(shift));
+    let at = tcp(&f.model, &shifted_end);
+    let dp = (at.translation.vector - goal.translation.vector).norm();
+    let dr = log(&(at.rotation * goal.rotation.inverse())).norm();
+    assert!(dp < 1e-3 && dr < 0.5f64.to_radians(), "{dp} m, {dr} rad");
+    let (before, after) = ((end - reference).norm(), (shifted_end - reference).norm());
+    println!("null-space shift 0.15 rad: end {before:.4} → {after:.4} rad from the reference");
+    assert!(after < 0.1 * before, "{before} → {after}");
+    let gamma_end = |p: &[[f64; NA]]| {
+        let mut g = vec![0.0; p.len()];
+        null_space_coordinate(&f.model, p, f.cfg.min_manipulability, &mut g).unwrap();
+        g[g.len() - 1]
+    };
+    let grown = gamma_end(&shifted_path) - gamma_end(&path);
+    assert!(
+        (grown - shift).abs() < 2e-3,
+        "γ grew {grown}, shift {shift}"
+    );
+    // Starts and ends at rest like the paper's: the first and last steps barely move.
+    let step =
+        |p: &[[f64; NA]], k: usize| (JointVector::from(p[k + 1]) - JointVector::from(p[k])).amax();
+    let n = shifted_path.len() - 2;
+    assert!(step(&shifted_path, 0) <= step(&path, 0) + 1e-9);
+    assert!(step(&shifted_path, n) < 1e-5, "{}", step(&shifted_path, n));
+}
+
+#[test]
+fn the_shift_ramp_is_a_minimum_jerk_step() {
+    // h(0) = 0, h(1) = 1, h' and h'' vanish at both ends (finite differences), monotone.
+    let h = prf_shared::rdmp::shift_ramp;
+    assert_eq!((h(0.0), h(1.0), h(-1.0), h(2.0)), (0.0, 1.0, 0.0, 1.0));
+    let e = 1e-4;
+    for s in [0.0, 1.0] {
+        let d1 = (h(s + e) - h(s - e)) / (2.0 * e);
+        let d2 = (h(s + e) - 2.0 * h(s) + h(s - e)) / (e * e);
+        assert!(d1.abs() < 1e-6 && d2.abs() < 1e-2, "at {s}: {d1}, {d2}");
+    }
+    assert!((1..1000).all(|i| h(i as f64 / 1000.0) > h((i - 1) as f64 / 1000.0)));
+    assert!((h(0.5) - 0.5).abs() < 1e-15);
 }

@@ -9,19 +9,28 @@
 //! demonstrated TCP goal (same height and orientation): IntegrateRDMP (Alg. 2) from q_a,H,
 //! the DMP (Eq. 5) from q_a,H to the RDMP's final configuration, and the risk (Eq. 16) of
 //! both in Ω+. Goals the ground-truth IK cannot reach are kept and marked.
+//!
+//! Beyond the paper, a third trajectory per goal: the RDMP shifted along its null space
+//! ([`Rdmp::shifted`]) by the amount that brings the paper's final configuration toward the
+//! demonstration's last one ([`shift_toward`]), so the arm moves no more than the new goal
+//! needs. Near the demonstrated goal (within [`EXACT_WITHIN`]) every risk is also rated in
+//! the exact Ω+ (the dilated demonstrated balls, [`BallUnion`]), so the field's part of a
+//! risk shows beside the motion's.
 
 use anyhow::{Context, Result, anyhow, bail};
 use nalgebra::{SVector, Translation3, Vector3};
 use prf_files::dataset::{Dataset, Demonstration};
-use prf_learn::learn::location_kinds;
+use prf_learn::capsule::DEDUP;
+use prf_learn::exact::BallUnion;
+use prf_learn::learn::{Learner, learn_into, location_kinds};
 use prf_learn::workspace::LearnedField;
-use prf_learn::{LearnConfig, learn, skills};
+use prf_learn::{LearnConfig, skills};
 use prf_shared::dmp::PositionDmp;
 use prf_shared::field::DistanceField;
 use prf_shared::kinematics::{ArmKinematics, arm_base_pose};
-use prf_shared::rdmp::{Rdmp, RdmpConfig, integrate};
+use prf_shared::rdmp::{Rdmp, RdmpConfig, integrate, shift_toward};
 use prf_shared::risk::RiskAccumulator;
-use prf_shared::robot::RobotModel;
+use prf_shared::robot::{LINK_TOOL, RobotModel};
 use prf_shared::se3::{Pose, pose_from_array};
 use prf_shared::{JointVector, NA};
 use prf_sim::demogen::ik::{IkConfig, solutions};
@@ -39,6 +48,10 @@ pub const DMP_REACH: f64 = 1e-3;
 pub const REACH_POSITION: f64 = 1e-3;
 /// ... and in orientation, rad (0.5°).
 pub const REACH_ANGLE: f64 = 0.5 * std::f64::consts::PI / 180.0;
+
+/// Goals within this offset (in x and in y) of the demonstrated one are also rated in the
+/// exact Ω+, m (an exhaustive lookup costs ~20 field lookups).
+pub const EXACT_WITHIN: f64 = 0.03;
 
 /// The grid of new goals: `n` × `n` offsets in [−half_extent, half_extent]² (arm base frame
 /// x and y, which are horizontal).
@@ -142,6 +155,9 @@ pub struct Trajectory {
     pub ending: Ending,
     /// Risk (Eq. 16) in the approach's Ω+, m (NaN when it failed).
     pub risk: f64,
+    /// The same risk in the exact Ω+ (the dilated demonstrated balls, [`BallUnion`]), m;
+    /// None beyond [`EXACT_WITHIN`] and when it failed.
+    pub exact_risk: Option<f64>,
     /// Final configuration.
     pub end: [f64; NA],
     /// (t, elbow x in the arm base frame) every [`TRACE_EVERY`] steps.
@@ -157,8 +173,13 @@ pub struct GoalOutcome {
     /// The ground-truth IK found a configuration for the goal.
     pub reachable: bool,
     pub rdmp: Trajectory,
+    /// The RDMP shifted along its null space toward the demonstration's last configuration,
+    /// and the shift δ (rad; None when the RDMP failed or ended singular).
+    pub shifted: Option<(f64, Trajectory)>,
     /// The DMP to the RDMP's final configuration (None when the RDMP failed).
     pub dmp: Option<Trajectory>,
+    /// A lower bound of the exact risk of any motion that ends at the goal, m ([`tcp_floor`]).
+    pub floor: f64,
 }
 
 /// Everything measured on one approach.
@@ -176,6 +197,8 @@ pub struct ApproachResult {
     pub arm_base: Pose,
     /// Ω+ of the location type, learned from the demonstration alone.
     pub field: LearnedField,
+    /// The same Ω+ exactly: the demonstrated balls dilated by ε.
+    pub exact: BallUnion,
     pub goals: Vec<GoalOutcome>,
     pub grid: GoalGrid,
 }
@@ -189,33 +212,69 @@ pub struct Summary {
     pub goals: usize,
     pub mean_risk: f64,
     pub max_risk: f64,
-    /// Share of integrated goals at risk 0.
-    pub zero: f64,
+    /// Integrated goals at risk 0.
+    pub zero: usize,
+    /// Goals rated in the exact Ω+ ([`EXACT_WITHIN`]), and those at exact risk 0.
+    pub exact_rated: usize,
+    pub exact_zero: usize,
 }
 
 impl ApproachResult {
-    /// Summaries of the RDMP and of the DMP.
-    pub fn summaries(&self) -> (Summary, Summary) {
-        let of = |ts: Vec<&Trajectory>| {
-            let ok: Vec<f64> = ts
-                .iter()
-                .filter(|t| !matches!(t.ending, Ending::Failed(_)))
-                .map(|t| t.risk)
-                .collect();
-            let n = ok.len().max(1) as f64;
-            Summary {
-                integrated: ok.len(),
-                reached: ts.iter().filter(|t| t.ending == Ending::Reached).count(),
-                goals: self.goals.len(),
-                mean_risk: ok.iter().sum::<f64>() / n,
-                max_risk: ok.iter().copied().fold(0.0, f64::max),
-                zero: ok.iter().filter(|r| **r == 0.0).count() as f64 / n,
-            }
-        };
-        (
-            of(self.goals.iter().map(|g| &g.rdmp).collect()),
-            of(self.goals.iter().filter_map(|g| g.dmp.as_ref()).collect()),
-        )
+    /// Goals whose [`GoalOutcome::floor`] is 0: the most any motion could bring to risk 0
+    /// (the others are proven above 0).
+    pub fn floor_zero(&self) -> usize {
+        self.goals.iter().filter(|g| !(g.floor > 0.0)).count()
+    }
+}
+
+impl Summary {
+    /// The figures of `trajectories` over `goals` goals.
+    fn of<'a>(goals: usize, trajectories: impl Iterator<Item = &'a Trajectory>) -> Summary {
+        let ts: Vec<&Trajectory> = trajectories.collect();
+        let ok: Vec<f64> = ts
+            .iter()
+            .filter(|t| !matches!(t.ending, Ending::Failed(_)))
+            .map(|t| t.risk)
+            .collect();
+        let exact: Vec<f64> = ts.iter().filter_map(|t| t.exact_risk).collect();
+        Summary {
+            integrated: ok.len(),
+            reached: ts.iter().filter(|t| t.ending == Ending::Reached).count(),
+            goals,
+            mean_risk: ok.iter().sum::<f64>() / ok.len().max(1) as f64,
+            max_risk: ok.iter().copied().fold(0.0, f64::max),
+            zero: ok.iter().filter(|r| **r == 0.0).count(),
+            exact_rated: exact.len(),
+            exact_zero: exact.iter().filter(|r| **r == 0.0).count(),
+        }
+    }
+}
+
+/// The summaries of one approach's three primitives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Summaries {
+    /// The paper's RDMP.
+    pub rdmp: Summary,
+    /// The RDMP shifted along its null space.
+    pub shifted: Summary,
+    /// The joint-space DMP.
+    pub dmp: Summary,
+}
+
+impl ApproachResult {
+    /// Summaries of the RDMP, the shifted RDMP and the DMP.
+    pub fn summaries(&self) -> Summaries {
+        let n = self.goals.len();
+        Summaries {
+            rdmp: Summary::of(n, self.goals.iter().map(|g| &g.rdmp)),
+            shifted: Summary::of(
+                n,
+                self.goals
+                    .iter()
+                    .filter_map(|g| g.shifted.as_ref().map(|s| &s.1)),
+            ),
+            dmp: Summary::of(n, self.goals.iter().filter_map(|g| g.dmp.as_ref())),
+        }
     }
 
     /// Share of goals with both trajectories integrated where the RDMP's risk ≤ the DMP's.
@@ -240,18 +299,27 @@ pub fn elbow_x(model: &RobotModel, q: &JointVector) -> f64 {
 struct Rater<'a, F> {
     model: &'a RobotModel,
     field: &'a F,
+    exact: Option<&'a BallUnion>,
     arm_base: &'a Pose,
     acc: RiskAccumulator,
+    exact_acc: RiskAccumulator,
     elbow: Vec<(f64, f64)>,
 }
 
 impl<'a, F: DistanceField> Rater<'a, F> {
-    fn new(model: &'a RobotModel, field: &'a F, arm_base: &'a Pose) -> Self {
+    fn new(
+        model: &'a RobotModel,
+        field: &'a F,
+        exact: Option<&'a BallUnion>,
+        arm_base: &'a Pose,
+    ) -> Self {
         Rater {
             model,
             field,
+            exact,
             arm_base,
             acc: RiskAccumulator::default(),
+            exact_acc: RiskAccumulator::default(),
             elbow: Vec::new(),
         }
     }
@@ -260,6 +328,9 @@ impl<'a, F: DistanceField> Rater<'a, F> {
     fn add(&mut self, k: usize, q: &JointVector) {
         let kin = ArmKinematics::new(self.model, q);
         self.acc.add(self.model, self.field, self.arm_base, &kin);
+        if let Some(exact) = self.exact {
+            self.exact_acc.add(self.model, exact, self.arm_base, &kin);
+        }
         if k.is_multiple_of(TRACE_EVERY) {
             let dt = RdmpConfig::default().dt;
             self.elbow
@@ -272,6 +343,7 @@ impl<'a, F: DistanceField> Rater<'a, F> {
         Trajectory {
             ending,
             risk: self.acc.risk(),
+            exact_risk: self.exact.map(|_| self.exact_acc.risk()),
             end,
             elbow: self.elbow,
         }
@@ -283,9 +355,51 @@ fn failed(model: &RobotModel, why: String) -> Trajectory {
     Trajectory {
         ending: Ending::Failed(why),
         risk: f64::NAN,
+        exact_risk: None,
         end: model.home,
         elbow: Vec::new(),
     }
+}
+
+/// Points per sphere at which [`tcp_floor`] looks for a witness outside Ω+.
+pub const FLOOR_POINTS: usize = 96;
+
+/// A lower bound of the exact risk (Eq. 16 with the true signed distance of Ω+) of every
+/// motion whose TCP ends at `goal` (arm base frame): the spheres rigid with the TCP (link 7
+/// and the tool) are there whatever the arm does, and a point p of such a sphere (centre c,
+/// radius r) outside Ω+ at distance d > 0 (where the distance to the union of balls is exact)
+/// gives sdf(c) + r ≥ d − |p − c| + r ≥ d, the signed distance being 1-Lipschitz. Points are
+/// [`FLOOR_POINTS`] of each sphere's surface (a Fibonacci lattice) and its centre; every
+/// distance is taken [`DEDUP`] less, as a demonstrated sphere the sweep dropped lies within it
+/// of a kept one.
+pub fn tcp_floor(model: &RobotModel, exact: &BallUnion, arm_base: &Pose, goal: &Pose) -> f64 {
+    let tool = goal * model.tcp.inverse();
+    let link7 = tool * model.flange.inverse();
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let direction = |i: usize| {
+        let z = 1.0 - 2.0 * (i as f64 + 0.5) / FLOOR_POINTS as f64;
+        let (rho, phi) = ((1.0 - z * z).sqrt(), golden * i as f64);
+        Vector3::new(rho * phi.cos(), rho * phi.sin(), z)
+    };
+    let mut floor = 0.0f64;
+    for s in &model.spheres {
+        let frame = match s.link as usize {
+            LINK_TOOL => &tool,
+            l if l == NA => &link7,
+            _ => continue,
+        };
+        let c = arm_base
+            .transform_point(&frame.transform_point(&s.centre.into()))
+            .coords;
+        // The centre, when it is outside too, gives the sphere's term itself.
+        let centre = exact.distance(&c);
+        let at_centre = if centre > 0.0 { centre + s.radius } else { 0.0 };
+        let outside = (0..FLOOR_POINTS)
+            .map(|i| exact.distance(&(c + direction(i) * s.radius)))
+            .fold(at_centre, f64::max);
+        floor = floor.max(outside - DEDUP);
+    }
+    floor
 }
 
 /// IntegrateRDMP from q_a,H to `goal`, with its risk and elbow trace.
@@ -294,10 +408,11 @@ fn rdmp_trajectory(
     rdmp: &Rdmp,
     goal: &Pose,
     field: &impl DistanceField,
+    exact: Option<&BallUnion>,
     arm_base: &Pose,
 ) -> Trajectory {
     let q0 = JointVector::from(model.home);
-    let mut rater = Rater::new(model, field, arm_base);
+    let mut rater = Rater::new(model, field, exact, arm_base);
     rater.add(0, &q0);
     let q = match integrate(model, rdmp, &q0, goal, &RdmpConfig::default(), |s| {
         rater.add(s.step, &s.q)
@@ -322,6 +437,7 @@ fn dmp_trajectory(
     dmp: &PositionDmp<NA>,
     end: &[f64; NA],
     field: &impl DistanceField,
+    exact: Option<&BallUnion>,
     arm_base: &Pose,
 ) -> Trajectory {
     let dt = RdmpConfig::default().dt;
@@ -330,7 +446,7 @@ fn dmp_trajectory(
         Ok(s) => s,
         Err(e) => return failed(model, e.to_string()),
     };
-    let mut rater = Rater::new(model, field, arm_base);
+    let mut rater = Rater::new(model, field, exact, arm_base);
     rater.add(0, &state.y);
     let mut ahead = None;
     while !phase.finished() {
@@ -378,12 +494,22 @@ pub fn run_approach(
         ..dataset.clone()
     };
     let cfg = LearnConfig::default();
-    let knowledge = learn(&single, model, &cfg, &|_| {})
-        .with_context(|| format!("learning from demonstration {}", d.id))?;
+    let learning = || format!("learning from demonstration {}", d.id);
+    let mut learner = Learner::new(&single, model, &cfg).with_context(learning)?;
+    let knowledge =
+        learn_into(&mut learner, &single.demonstrations, &|_| {}).with_context(learning)?;
     let t = location_kinds(&single)
         .iter()
         .position(|k| *k == d.task.from.kind)
         .ok_or_else(|| anyhow!("location type {} not in the dataset", d.task.from.kind))?;
+    let sweep = learner.sweep(t).ok_or_else(|| {
+        anyhow!(
+            "demonstration {} swept nothing at {}",
+            d.id,
+            d.task.from.kind
+        )
+    })?;
+    let exact = BallUnion::dilated(&sweep.spheres, knowledge.config.workspace.epsilon);
     let Some(field) = knowledge.location_types[t].field.clone() else {
         bail!(
             "demonstration {} swept no workspace at {}",
@@ -399,7 +525,8 @@ pub fn run_approach(
         .map_err(|e| anyhow!("TrainRDMP on {}: {e}", d.id))?;
     let dmp = PositionDmp::<NA>::train(&cfg.dmp, dt, path.len(), |k| SVector::from(path[k]))
         .map_err(|e| anyhow!("training the DMP on {}: {e}", d.id))?;
-    let goal = ArmKinematics::new(model, &JointVector::from(path[path.len() - 1])).tcp;
+    let demo_end = JointVector::from(path[path.len() - 1]);
+    let goal = ArmKinematics::new(model, &demo_end).tcp;
     let offsets = grid.offsets();
     let cells: Vec<(f64, f64)> = offsets
         .iter()
@@ -416,15 +543,29 @@ pub fn run_approach(
                 goal.rotation,
             );
             let reachable = solutions(model, &g, &home, &ik).is_ok();
-            let rdmp = rdmp_trajectory(model, &rdmp, &g, &view, &arm_base);
-            let dmp = (!matches!(rdmp.ending, Ending::Failed(_)))
-                .then(|| dmp_trajectory(model, &dmp, &rdmp.end, &view, &arm_base));
+            let near = (dx.abs() <= EXACT_WITHIN + 1e-9 && dy.abs() <= EXACT_WITHIN + 1e-9)
+                .then_some(&exact);
+            let rdmp_t = rdmp_trajectory(model, &rdmp, &g, &view, near, &arm_base);
+            let integrated = !matches!(rdmp_t.ending, Ending::Failed(_));
+            let shifted = integrated
+                .then(|| shift_toward(model, &rdmp_t.end.into(), &demo_end, cfg.min_manipulability))
+                .flatten()
+                .map(|shift| {
+                    let t =
+                        rdmp_trajectory(model, &rdmp.shifted(shift), &g, &view, near, &arm_base);
+                    (shift, t)
+                });
+            let dmp = integrated
+                .then(|| dmp_trajectory(model, &dmp, &rdmp_t.end, &view, near, &arm_base));
+            let rdmp = rdmp_t;
             GoalOutcome {
                 dx,
                 dy,
                 reachable,
                 rdmp,
+                shifted,
                 dmp,
+                floor: tcp_floor(model, &exact, &arm_base, &g),
             }
         })
         .collect();
@@ -436,6 +577,7 @@ pub fn run_approach(
         goal,
         arm_base,
         field,
+        exact,
         goals,
         grid,
     })

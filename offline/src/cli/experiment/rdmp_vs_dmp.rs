@@ -4,7 +4,7 @@ use super::RdmpVsDmpArgs;
 use crate::cli::progress::Bar;
 use anyhow::{Context, Result};
 use prf_offline::experiment::rdmp_vs_dmp::{
-    ApproachResult, Ending, GoalGrid, Summary, Trajectory, elbow_x, experiment, workspace_slice,
+    ApproachResult, Ending, GoalGrid, GoalOutcome, Trajectory, elbow_x, experiment, workspace_slice,
 };
 use prf_offline::plots::{self, HeatMap, Histogram, LinePlot, Series};
 use prf_sim::world::World;
@@ -79,11 +79,11 @@ fn ending_name(e: &Ending) -> &'static str {
 /// One row per goal and primitive.
 fn goals_csv(results: &[ApproachResult]) -> String {
     let mut s = String::from(
-        "approach,dx_m,dy_m,ik_reachable,primitive,ending,risk_m,end_error,end_angle_error_rad,failure\n",
+        "approach,dx_m,dy_m,ik_reachable,primitive,ending,risk_m,exact_risk_m,null_shift_rad,end_error,end_angle_error_rad,failure\n",
     );
     for r in results {
         for g in &r.goals {
-            let mut row = |name: &str, t: &Trajectory| {
+            let mut row = |name: &str, t: &Trajectory, shift: f64| {
                 let (p, ang) = match t.ending {
                     Ending::Missed { position, angle } => (position, angle),
                     Ending::MissedJoints { error } => (error, 0.0),
@@ -95,18 +95,22 @@ fn goals_csv(results: &[ApproachResult]) -> String {
                 };
                 let _ = writeln!(
                     s,
-                    "{},{:.4},{:.4},{},{name},{},{:.6},{p:.6},{ang:.6},{why}",
+                    "{},{:.4},{:.4},{},{name},{},{:.6},{},{shift:.6},{p:.6},{ang:.6},{why}",
                     r.name,
                     g.dx,
                     g.dy,
                     g.reachable,
                     ending_name(&t.ending),
-                    t.risk
+                    t.risk,
+                    t.exact_risk.map_or(String::new(), |e| format!("{e:.6}"))
                 );
             };
-            row("rdmp", &g.rdmp);
+            row("rdmp", &g.rdmp, 0.0);
+            if let Some((shift, t)) = &g.shifted {
+                row("rdmp_shifted", t, *shift);
+            }
             if let Some(d) = &g.dmp {
-                row("dmp", d);
+                row("dmp", d, 0.0);
             }
         }
     }
@@ -115,15 +119,19 @@ fn goals_csv(results: &[ApproachResult]) -> String {
 
 fn summary_csv(results: &[ApproachResult]) -> String {
     let mut s = String::from(
-        "approach,primitive,goals,ik_reachable,integrated,reached,mean_risk_m,max_risk_m,share_risk_0,share_rdmp_not_worse\n",
+        "approach,primitive,goals,ik_reachable,integrated,reached,mean_risk_m,max_risk_m,risk_0,exact_rated,exact_risk_0,share_rdmp_not_worse\n",
     );
     for r in results {
-        let (rd, dm) = r.summaries();
+        let all = r.summaries();
         let reachable = r.goals.iter().filter(|g| g.reachable).count();
-        for (name, x) in [("rdmp", rd), ("dmp", dm)] {
+        for (name, x) in [
+            ("rdmp", all.rdmp),
+            ("rdmp_shifted", all.shifted),
+            ("dmp", all.dmp),
+        ] {
             let _ = writeln!(
                 s,
-                "{},{name},{},{reachable},{},{},{:.6},{:.6},{:.4},{:.4}",
+                "{},{name},{},{reachable},{},{},{:.6},{:.6},{},{},{},{:.4}",
                 r.name,
                 x.goals,
                 x.integrated,
@@ -131,6 +139,8 @@ fn summary_csv(results: &[ApproachResult]) -> String {
                 x.mean_risk,
                 x.max_risk,
                 x.zero,
+                x.exact_rated,
+                x.exact_zero,
                 r.rdmp_not_worse()
             );
         }
@@ -138,42 +148,65 @@ fn summary_csv(results: &[ApproachResult]) -> String {
     s
 }
 
+/// Per approach a row per primitive: reached, mean/max risk, goals at risk 0 in the field and
+/// in the exact Ω+ (near the demonstrated goal), and how often the RDMP is not worse.
 fn summary_table(results: &[ApproachResult]) -> String {
     let mut s = format!(
-        "  {:<15} {:>9} {:>15} {:>17} {:>15} {:>10}\n",
-        "approach", "IK reach", "RDMP reached", "mean/max risk", "risk 0", "RDMP ≤ DMP"
+        "  {:<15} {:>9} {:<13} {:>9} {:>15} {:>8} {:>14} {:>10}\n",
+        "approach",
+        "IK reach",
+        "primitive",
+        "reached",
+        "mean/max risk",
+        "risk 0",
+        "exact risk 0",
+        "RDMP ≤ DMP"
     );
-    let fmt = |x: &Summary| {
-        (
-            format!("{:.1}/{:.1} mm", x.mean_risk * 1e3, x.max_risk * 1e3),
-            format!("{:.1} %", x.zero * 100.0),
-        )
-    };
+    let mut floors = String::new();
     for r in results {
-        let (rd, dm) = r.summaries();
+        let all = r.summaries();
         let reachable = r.goals.iter().filter(|g| g.reachable).count();
-        let ((rm, rz), (dmr, dz)) = (fmt(&rd), fmt(&dm));
-        let _ = writeln!(
-            s,
-            "  {:<15} {:>9} {:>15} {:>17} {:>15} {:>10}",
+        let rows = [
+            ("RDMP", all.rdmp),
+            ("RDMP+shift", all.shifted),
+            ("DMP", all.dmp),
+        ];
+        for (i, (name, x)) in rows.iter().enumerate() {
+            let first = i == 0;
+            let _ = writeln!(
+                s,
+                "  {:<15} {:>9} {:<13} {:>9} {:>15} {:>8} {:>14} {:>10}",
+                if first { r.name.as_str() } else { "" },
+                if first {
+                    format!("{reachable}/{}", x.goals)
+                } else {
+                    String::new()
+                },
+                name,
+                format!("{}/{}", x.reached, x.goals),
+                format!("{:.1}/{:.1} mm", x.mean_risk * 1e3, x.max_risk * 1e3),
+                x.zero,
+                format!("{}/{}", x.exact_zero, x.exact_rated),
+                if first {
+                    format!("{:.0} %", r.rdmp_not_worse() * 100.0)
+                } else {
+                    String::new()
+                }
+            );
+        }
+        let _ = write!(
+            floors,
+            "{}{}: {}/{}",
+            if floors.is_empty() { "" } else { ", " },
             r.name,
-            format!("{reachable}/{}", rd.goals),
-            format!("{}/{}", rd.reached, rd.goals),
-            format!("RDMP {rm}"),
-            format!("RDMP {rz}"),
-            format!("{:.0} %", r.rdmp_not_worse() * 100.0)
-        );
-        let _ = writeln!(
-            s,
-            "  {:<15} {:>9} {:>15} {:>17} {:>15} {:>10}",
-            "",
-            "",
-            format!("DMP {}", dm.integrated),
-            format!("DMP {dmr}"),
-            format!("DMP {dz}"),
-            ""
+            r.floor_zero(),
+            r.goals.len()
         );
     }
+    let _ = writeln!(
+        s,
+        "  goals not proven above risk 0 for every motion (the spheres rigid with the TCP end outside the exact Ω+ at the others): {floors}"
+    );
     s
 }
 
@@ -182,25 +215,32 @@ fn summary_table(results: &[ApproachResult]) -> String {
 fn charts(r: &ApproachResult, dir: &Path) -> Result<usize> {
     let stem = |what: &str| dir.join(format!("{}_{what}", slug(&r.name)));
     let offsets = r.grid.offsets();
-    let risks = |dmp: bool| -> Vec<Option<f64>> {
+    let risks = |pick: fn(&GoalOutcome) -> Option<&Trajectory>| -> Vec<Option<f64>> {
         r.goals
             .iter()
             .map(|g| {
-                let t = if dmp { g.dmp.as_ref() } else { Some(&g.rdmp) };
-                t.filter(|t| !matches!(t.ending, Ending::Failed(_)) && g.reachable)
+                pick(g)
+                    .filter(|t| !matches!(t.ending, Ending::Failed(_)) && g.reachable)
                     .map(|t| t.risk * 1e3)
             })
             .collect()
     };
-    let (rdmp, dmp) = (risks(false), risks(true));
+    let rdmp = risks(|g| Some(&g.rdmp));
+    let shifted = risks(|g| g.shifted.as_ref().map(|s| &s.1));
+    let dmp = risks(|g| g.dmp.as_ref());
     let max = rdmp
         .iter()
+        .chain(&shifted)
         .chain(&dmp)
         .flatten()
         .copied()
         .fold(0.0f64, f64::max)
         .max(1.0);
-    for (name, values) in [("RDMP", &rdmp), ("DMP", &dmp)] {
+    for (name, file, values) in [
+        ("RDMP", "rdmp", &rdmp),
+        ("null-space-shifted RDMP", "rdmp_shifted", &shifted),
+        ("DMP", "dmp", &dmp),
+    ] {
         let title = format!("{}: {name} risk over new goals", r.name);
         plots::save(
             &HeatMap {
@@ -214,11 +254,12 @@ fn charts(r: &ApproachResult, dir: &Path) -> Result<usize> {
                 max,
                 marker: Some((0.0, 0.0)),
             },
-            &stem(&format!("risk_{}", name.to_lowercase())),
+            &stem(&format!("risk_{file}")),
         )?;
     }
     let samples = [
         ("RDMP", rdmp.iter().flatten().copied().collect()),
+        ("RDMP+shift", shifted.iter().flatten().copied().collect()),
         ("DMP", dmp.iter().flatten().copied().collect()),
     ];
     let title = format!("{}: risk histogram over {} goals", r.name, r.goals.len());
@@ -300,5 +341,5 @@ fn charts(r: &ApproachResult, dir: &Path) -> Result<usize> {
         },
         &stem("workspace"),
     )?;
-    Ok(5)
+    Ok(6)
 }
