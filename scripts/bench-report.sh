@@ -2,7 +2,7 @@
 # Runs the benchmarks and writes docs/benchmarks.md (or the file given): the machine, the date,
 # the commit, and per benchmark its command and what it printed. The file is generated; do not
 # edit it by hand. Usage: scripts/bench-report.sh [--full] [OUT.md]
-# About 4 minutes on 2 cores; --full runs every task of the example cell on the firmware (one
+# About 6 minutes on 2 cores; --full runs every task of the example cell on the firmware (one
 # task otherwise: Part1 CNC1 → Table1), about 10 minutes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -60,6 +60,10 @@ section "Part-pose envelope, place side" \
   "the same at the Tables" \
   "$prf" envelope "$work/cell.blob" --part Part1 --from CNC1 --to Table1 --at to \
   --range-mm 10 --step-mm 5 --yaw-deg=-5,-2.5,0,2.5,5 -o "$work/envelope-to"
+section "Part-pose envelope, pick side, ±20 mm and ±10°" \
+  "how far beyond ±10 mm and ±5° the pick side stays safe, and how long one task's envelope over 405 offsets takes" \
+  "$prf" envelope "$work/cell.blob" --part Part1 --from CNC1 --to Table1 --at from \
+  --range-mm 20 --step-mm 5 --yaw-deg=-10,-5,0,5,10 -o "$work/envelope-wide"
 section "Learned workspaces against the exact Ω+" \
   "how far the conservative field lies above the exact signed distance near the boundary, and the risk term of demonstrated spheres moved by up to 10 mm" \
   "$prf" field-error "$work/ds" --points 1000

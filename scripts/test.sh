@@ -4,7 +4,15 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-step() { printf '\n==> %s\n' "$*"; }
+# After each step, how long it took (CI gives the whole command 40 minutes).
+last=$SECONDS
+step() {
+  [ -z "${current:-}" ] || printf '    (%s: %d s)\n' "$current" $((SECONDS - last))
+  current=${*%%(*}; current=${current%%:*}; last=$SECONDS
+  printf '\n==> %s\n' "$*"
+}
+timing() { printf '    (%s: %d s)\ntotal %d s\n' "${current:-set-up}" $((SECONDS - last)) "$SECONDS"; }
+trap timing EXIT
 
 # Debian's Rust (rustc/cargo 1.96 with matching std sources) cross-builds the no_std crates for
 # the Cortex-M7 cell controller; rustup cannot add targets on these machines. Ruckig's C++ core
@@ -77,12 +85,12 @@ cargo run --locked -q -p prf-offline --bin prf -- export-mcap --blob "$smoke/cel
   -o "$smoke/knowledge.mcap" | tail -n 1
 cargo run --locked -q -p prf-offline --bin prf -- field-error "$smoke" --points 200 | tail -n 4
 
-step "fuzzing, short: every target 10 s from the committed seeds (scripts/fuzz.sh all 10; installs cargo-fuzz)"
-scripts/fuzz.sh all 10
+step "fuzzing, short: every target 5 s from the committed seeds (scripts/fuzz.sh all 5; installs cargo-fuzz)"
+scripts/fuzz.sh all 5
 
 step "cargo test (workspace)"
 log=$(mktemp)
-trap 'rm -f "$log"' EXIT
+trap 'rm -f "$log"; timing' EXIT
 cargo test --workspace --locked 2>&1 | tee "$log"
 # One closing line over all test binaries (cargo's last line is often a crate with 0 doc-tests).
 awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($i ~ /^passed/) p += $(i-1); if ($i ~ /^failed/) f += $(i-1) } }
