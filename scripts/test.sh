@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 last=$SECONDS
 step() {
   [ -z "${current:-}" ] || printf '    (%s: %d s)\n' "$current" $((SECONDS - last))
-  current=${*%%(*}; current=${current%%:*}; last=$SECONDS
+  current=${*%% (*}; last=$SECONDS
   printf '\n==> %s\n' "$*"
 }
 timing() { printf '    (%s: %d s)\ntotal %d s\n' "${current:-set-up}" $((SECONDS - last)) "$SECONDS"; }

@@ -193,7 +193,7 @@ pub fn certificates(
     capsules: &[Capsule],
     last: Option<Certified>,
     cfg: &WorkspaceConfig,
-) -> ((Vec<u8>, Vec<u8>), Certified) {
+) -> ((Vec<u8>, Vec<u8>, usize), Certified) {
     debug_assert!(learned.certificates.is_empty());
     let field = learned.field();
     let [nx, ny, nz] = field.dims();
@@ -252,12 +252,13 @@ pub fn certificates(
 }
 
 /// The certificates (cell, capsule index) of the cells' capsules `balls`, and the capsules,
-/// each stored once, in the order of first use. Beyond [`MAX_CAPSULES`] a capsule is not
-/// stored and the certificates naming it are left out: the field stays conservative, and the
-/// spheres they certified rate a risk (a location type that needs more capsules than the
-/// u16 index holds learns with a smaller margin).
-fn records(balls: &[Vec<Cert>]) -> (Vec<u8>, Vec<u8>) {
-    let (mut certificates, mut capsules) = (Vec::new(), Vec::new());
+/// each stored once, in the order of first use, and how many certificates were left out:
+/// beyond [`MAX_CAPSULES`] a capsule is not stored and the certificates naming it are left
+/// out, so the field stays conservative and the spheres they certified rate a risk (a
+/// location type that needs more capsules than the u16 index holds learns with a smaller
+/// margin; `prf learn` says so).
+fn records(balls: &[Vec<Cert>]) -> (Vec<u8>, Vec<u8>, usize) {
+    let (mut certificates, mut capsules, mut left_out) = (Vec::new(), Vec::new(), 0);
     let mut index: HashMap<[i64; 7], u16> = HashMap::new();
     for (cell, list) in balls.iter().enumerate() {
         for k in list {
@@ -273,7 +274,10 @@ fn records(balls: &[Vec<Cert>]) -> (Vec<u8>, Vec<u8>) {
                     index.insert(key, next as u16);
                     next as u16
                 }
-                None => continue,
+                None => {
+                    left_out += 1;
+                    continue;
+                }
             };
             certificates.extend_from_slice(&(cell as u32).to_le_bytes());
             certificates.extend_from_slice(&i.to_le_bytes());
@@ -281,7 +285,7 @@ fn records(balls: &[Vec<Cert>]) -> (Vec<u8>, Vec<u8>) {
     }
     debug_assert_eq!(certificates.len() % CERT_BYTES, 0);
     debug_assert_eq!(capsules.len() % CAPSULE_BYTES, 0);
-    (certificates, capsules)
+    (certificates, capsules, left_out)
 }
 
 /// A certificate capsule as the field stores it: ends and radius on the [`CERT_UNIT`] grid.
@@ -475,5 +479,26 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn capsules_beyond_the_index_range_leave_their_certificates_out_and_are_counted() {
+        // MAX_CAPSULES + 10 distinct capsules in cell 0, then the first one again in cell 1:
+        // the first MAX_CAPSULES are stored, the 10 beyond are counted, and a capsule already
+        // stored is still named after the overflow.
+        let cert = |i: usize| {
+            let a = Vector3::new((i % 256) as f64, (i / 256) as f64, 0.0) * CERT_UNIT;
+            Cert::quantized(&a, &(a + Vector3::x() * 0.01), 0.05).unwrap()
+        };
+        let cells = vec![
+            (0..MAX_CAPSULES + 10).map(cert).collect::<Vec<_>>(),
+            vec![cert(0)],
+        ];
+        let (certificates, capsules, left_out) = records(&cells);
+        assert_eq!(left_out, 10);
+        assert_eq!(capsules.len(), MAX_CAPSULES * CAPSULE_BYTES);
+        assert_eq!(certificates.len(), (MAX_CAPSULES + 1) * CERT_BYTES);
+        let last = &certificates[certificates.len() - CERT_BYTES..];
+        assert_eq!(last, [1, 0, 0, 0, 0, 0], "cell 1 names capsule 0");
     }
 }

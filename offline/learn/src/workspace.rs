@@ -943,6 +943,10 @@ pub struct LearnedField {
     /// Demonstrated spheres (after de-duplication) and feature balls used.
     pub spheres: usize,
     pub feature_balls: usize,
+    /// Certificates left out because the field needed more than
+    /// [`MAX_CAPSULES`](prf_shared::field::MAX_CAPSULES) capsules
+    /// (the field stays conservative; the spheres they named rate a risk).
+    pub uncertified: usize,
 }
 
 impl LearnedField {
@@ -1147,6 +1151,7 @@ pub fn build_field(sweep: &mut Sweep, cfg: &WorkspaceConfig) -> Option<LearnedFi
         capsules: Vec::new(),
         spheres: sweep.spheres.len(),
         feature_balls: used.len(),
+        uncertified: 0,
     };
     let (records, certified) = certify::certificates(
         &learned,
@@ -1155,7 +1160,7 @@ pub fn build_field(sweep: &mut Sweep, cfg: &WorkspaceConfig) -> Option<LearnedFi
         sweep.certified.take(),
         cfg,
     );
-    (learned.certificates, learned.capsules) = records;
+    (learned.certificates, learned.capsules, learned.uncertified) = records;
     sweep.certified = Some(certified);
     Some(learned)
 }

@@ -67,6 +67,21 @@ pub struct Args {
     pub quiet: bool,
 }
 
+/// Says, on standard error, which workspaces left certificates out for want of capsule
+/// indices (their spheres then rate a risk: the reuse margin is not kept everywhere).
+fn uncertified_note(k: &prf_learn::Knowledge) {
+    for l in &k.location_types {
+        if let Some(f) = l.field.as_ref().filter(|f| f.uncertified > 0) {
+            eprintln!(
+                "note: workspace {} needs more than {} certificate capsules; {} certificates were left out, so some demonstrated spheres moved within the reuse margin rate a risk (learn with a smaller --margin to keep it everywhere)",
+                l.name,
+                prf_shared::field::MAX_CAPSULES,
+                f.uncertified
+            );
+        }
+    }
+}
+
 pub fn run(a: &Args) -> anyhow::Result<()> {
     if let Some(kb) = &a.into {
         return add(a, kb);
@@ -104,6 +119,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         prf_files::atomic::write(kb, learner.save()?)
             .with_context(|| format!("writing {}", kb.display()))?;
     }
+    uncertified_note(&k);
     if a.quiet {
         return Ok(());
     }
@@ -196,6 +212,7 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
     let kb_write = write_kb(kb, bytes, &mut learner, &record)
         .with_context(|| format!("writing {}", kb.display()))?;
     let t_write = t2.elapsed().as_secs_f64() - t_compile;
+    uncertified_note(&k);
     if !a.quiet {
         println!(
             "added {} demonstration(s) to {} ({before} → {}): {}",
