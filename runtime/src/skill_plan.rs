@@ -56,16 +56,15 @@ use crate::recall::{Candidate, Recall};
 use crate::task::{Resolved, Task};
 use crate::task_plan::{Action, ActionPlan, FROM, HOME, TO};
 use prf_shared::field::Field;
-use prf_shared::kinematics::ArmKinematics;
+use prf_shared::kinematics::{ArmKinematics, tcp_rigid_spheres};
 use prf_shared::limits::LimitRatios;
 use prf_shared::motion::{Goal, GoalContext, MotionClass, PhysicalState};
 use prf_shared::rdmp::{Rdmp, RdmpError, RdmpRun};
 use prf_shared::risk::{RiskAccumulator, eta};
-use prf_shared::robot::LINK_TOOL;
 use prf_shared::se3::{Pose, angle_between, pose_from_array};
 pub use prf_shared::timing::{ArmTiming, MAX_TIME_SCALE};
 use prf_shared::timing::{TimingError, pace_observed};
-use prf_shared::{JointVector, NA, blob::MAX_AFFORDANCES};
+use prf_shared::{JointVector, blob::MAX_AFFORDANCES};
 
 /// The classes a part-transportation plan uses.
 pub const PTT_CLASSES: [&str; 3] = ["Pick", "Place", "Move"];
@@ -448,19 +447,11 @@ pub fn goal_bound(
     arm_base: &Pose,
     goal: &Pose,
 ) -> f64 {
-    let tool = goal * model.tcp.inverse();
-    let link7 = tool * model.flange.inverse();
     let mut excess = f64::NEG_INFINITY;
-    for sphere in &model.spheres {
-        let frame = match sphere.link as usize {
-            LINK_TOOL => &tool,
-            l if l == NA => &link7,
-            _ => continue,
-        };
-        let c = frame.transform_point(&sphere.centre.into());
-        let lever = (c.coords - goal.translation.vector).norm();
+    for (sphere, c) in tcp_rigid_spheres(model, goal) {
+        let lever = (c - goal.translation.vector).norm();
         let delta = REACH_POSITION + REACH_ANGLE * lever;
-        let d = field.distance_lower_within(&arm_base.transform_point(&c).coords, delta);
+        let d = field.distance_lower_within(&arm_base.transform_point(&c.into()).coords, delta);
         // NaN (a non-finite goal): no bound.
         if d.is_nan() {
             return 0.0;

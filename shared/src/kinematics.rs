@@ -10,7 +10,7 @@ pub mod quaternion;
 pub use chain::{Chain, PERMUTATION_TOLERANCE};
 pub use frame::{Frame, quaternion_of};
 
-use crate::robot::{LINK_TOOL, N_FRAMES, RobotModel};
+use crate::robot::{LINK_TOOL, N_FRAMES, RobotModel, Sphere};
 use crate::se3::Pose;
 use crate::{Jacobian, JointVector, NA};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
@@ -214,6 +214,25 @@ impl<'a> FramesIn<'a> {
 #[inline(always)]
 fn is_z(a: &Vector3<f64>) -> bool {
     a.x == 0.0 && a.y == 0.0 && a.z == 1.0
+}
+
+/// The spheres rigid with the TCP (link 7's and the tool's) when the TCP is at `tcp` (arm base
+/// frame), each with its centre there: where every configuration that puts the TCP at `tcp`
+/// has them, whatever the rest of the arm does.
+pub fn tcp_rigid_spheres<'a>(
+    model: &'a RobotModel,
+    tcp: &Pose,
+) -> impl Iterator<Item = (&'a Sphere, Vector3<f64>)> + 'a {
+    let tool = tcp * model.tcp.inverse();
+    let link7 = tool * model.flange.inverse();
+    model.spheres.iter().filter_map(move |s| {
+        let frame = match s.link as usize {
+            LINK_TOOL => &tool,
+            l if l == NA => &link7,
+            _ => return None,
+        };
+        Some((s, frame.transform_point(&s.centre.into()).coords))
+    })
 }
 
 /// Pose of the platform base frame `b` in the world from q_m = [x, y, yaw].

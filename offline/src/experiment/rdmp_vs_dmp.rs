@@ -27,10 +27,10 @@ use prf_learn::workspace::LearnedField;
 use prf_learn::{LearnConfig, skills};
 use prf_shared::dmp::PositionDmp;
 use prf_shared::field::DistanceField;
-use prf_shared::kinematics::{ArmKinematics, arm_base_pose};
+use prf_shared::kinematics::{ArmKinematics, arm_base_pose, tcp_rigid_spheres};
 use prf_shared::rdmp::{Rdmp, RdmpConfig, integrate, shift_toward};
 use prf_shared::risk::RiskAccumulator;
-use prf_shared::robot::{LINK_TOOL, RobotModel};
+use prf_shared::robot::RobotModel;
 use prf_shared::se3::{Pose, pose_from_array};
 use prf_shared::{JointVector, NA};
 use prf_sim::demogen::ik::{IkConfig, solutions};
@@ -373,8 +373,6 @@ pub const FLOOR_POINTS: usize = 96;
 /// distance is taken [`DEDUP`] less, as a demonstrated sphere the sweep dropped lies within it
 /// of a kept one.
 pub fn tcp_floor(model: &RobotModel, exact: &BallUnion, arm_base: &Pose, goal: &Pose) -> f64 {
-    let tool = goal * model.tcp.inverse();
-    let link7 = tool * model.flange.inverse();
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     let direction = |i: usize| {
         let z = 1.0 - 2.0 * (i as f64 + 0.5) / FLOOR_POINTS as f64;
@@ -382,15 +380,8 @@ pub fn tcp_floor(model: &RobotModel, exact: &BallUnion, arm_base: &Pose, goal: &
         Vector3::new(rho * phi.cos(), rho * phi.sin(), z)
     };
     let mut floor = 0.0f64;
-    for s in &model.spheres {
-        let frame = match s.link as usize {
-            LINK_TOOL => &tool,
-            l if l == NA => &link7,
-            _ => continue,
-        };
-        let c = arm_base
-            .transform_point(&frame.transform_point(&s.centre.into()))
-            .coords;
+    for (s, c) in tcp_rigid_spheres(model, goal) {
+        let c = arm_base.transform_point(&c.into()).coords;
         // The centre, when it is outside too, gives the sphere's term itself.
         let centre = exact.distance(&c);
         let at_centre = if centre > 0.0 { centre + s.radius } else { 0.0 };
