@@ -40,8 +40,9 @@ pub struct Rdmp {
     pub gamma_goal: f64,
     /// Null-space shift δ (beyond the paper, 0 for its RDMP): the run tracks
     /// γ_DMP(t) + δ·h(t/τ), h the minimum-jerk ramp from 0 to 1 ([`shift_ramp`]), so the arm
-    /// ends δ along the null space from where the paper's RDMP would leave it. Not learned:
-    /// a plan chooses it per motion ([`Rdmp::shifted`]).
+    /// ends δ along the null space from where the paper's RDMP would leave it. Not learned
+    /// (0 in a decoded skill): set per run with [`Rdmp::shifted`]; the planner and executor
+    /// run the paper's RDMP.
     pub gamma_shift: f64,
 }
 
