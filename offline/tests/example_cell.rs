@@ -16,7 +16,7 @@ use prf_shared::nullspace::kernel;
 use prf_shared::rdmp::RdmpConfig;
 use prf_shared::robot::RobotModel;
 use prf_shared::se3::{Pose, pose_error, pose_from_array};
-use prf_sim::demogen::generate_dataset;
+use prf_sim::demogen::{generate_archive, generate_dataset};
 use prf_sim::validate::{self, LIMIT_TOLERANCE, MotionLimits};
 use prf_sim::world::World;
 use prf_sim::world::geometry::Cell;
@@ -63,6 +63,102 @@ fn check_grip_events(world: &World, model: &RobotModel, d: &Demonstration) {
     );
 }
 
+/// Re-evaluates program `d` independently of the planner that made it (`r`: its dense
+/// re-check against the true cell): r_d from every obstacle, self clearance, joint, speed
+/// and acceleration limits, the grasp and release, home at both ends, away from
+/// singularities on one elbow branch, and the base still while the arm is out. Its smallest
+/// manipulability.
+fn check_program(
+    world: &World,
+    model: &RobotModel,
+    d: &Demonstration,
+    r: &validate::Report,
+) -> f64 {
+    let c = world.clearance;
+    let mut min_manipulability = f64::INFINITY;
+    assert!(
+        r.min_world >= c.demonstration,
+        "{}: clearance {:.4} m < r_d at t = {} ({:?})",
+        d.id,
+        r.min_world,
+        r.min_world_t,
+        r.world_contact
+    );
+    assert!(
+        r.min_self >= c.self_collision,
+        "{}: self clearance {:.4} m at t = {} ({:?})",
+        d.id,
+        r.min_self,
+        r.min_self_t,
+        r.self_contact
+    );
+    assert_eq!(r.limit_violation, None, "{}", d.id);
+    assert!(
+        r.max_speed_ratio <= 1.0 + LIMIT_TOLERANCE,
+        "{}: speed {} at {:?}",
+        d.id,
+        r.max_speed_ratio,
+        r.max_speed_at
+    );
+    assert!(
+        r.max_acceleration_ratio <= 1.0 + LIMIT_TOLERANCE,
+        "{}: acceleration {} at {:?}",
+        d.id,
+        r.max_acceleration_ratio,
+        r.max_acceleration_at
+    );
+
+    check_grip_events(world, model, d);
+    // Starts and ends at home, arm folded.
+    let home = [world.home.x, world.home.y, world.home.yaw_deg.to_radians()];
+    for s in [&d.samples[0], d.samples.last().expect("samples")] {
+        for k in 0..3 {
+            assert!(
+                (s.base[k] - home[k]).abs() < 1e-9
+                    || k == 2 && (prf_shared::se3::wrap(s.base[k] - home[k])).abs() < 1e-9,
+                "{}",
+                d.id
+            );
+        }
+        assert!(
+            (JointVector::from(s.arm) - JointVector::from(model.home)).norm() < 1e-9,
+            "{}",
+            d.id
+        );
+    }
+    // Away from singularities, on one elbow branch: the arm motions are RDMP-trainable.
+    for smp in &d.samples {
+        let kin = ArmKinematics::new(model, &JointVector::from(smp.arm));
+        let w = kernel(&kin.jacobian(model)).manipulability;
+        min_manipulability = min_manipulability.min(w);
+        assert!(
+            w > 2.0 * RdmpConfig::default().min_manipulability,
+            "{}: manipulability {w} at t = {}",
+            d.id,
+            smp.t
+        );
+        assert!(
+            smp.arm[3] < 0.0,
+            "{}: a4 = {} at t = {}",
+            d.id,
+            smp.arm[3],
+            smp.t
+        );
+    }
+    // The base drives only with the arm at home.
+    for w in d.samples.windows(2) {
+        let base_moves = (0..3).any(|k| (w[1].base[k] - w[0].base[k]).abs() > 1e-9);
+        let arm_home = (JointVector::from(w[0].arm) - JointVector::from(model.home)).norm() < 1e-9;
+        assert!(
+            !base_moves || arm_home,
+            "{}: base moves at t = {} with the arm out",
+            d.id,
+            w[0].t
+        );
+    }
+    min_manipulability
+}
+
 #[test]
 fn generated_dataset_is_collision_free_within_limits_and_does_the_task() {
     let world = World::example();
@@ -90,88 +186,8 @@ fn generated_dataset_is_collision_free_within_limits_and_does_the_task() {
     let mut min_clearance = f64::INFINITY;
     let mut min_manipulability = f64::INFINITY;
     for (d, r) in back.demonstrations.iter().zip(&reports) {
-        assert!(
-            r.min_world >= c.demonstration,
-            "{}: clearance {:.4} m < r_d at t = {} ({:?})",
-            d.id,
-            r.min_world,
-            r.min_world_t,
-            r.world_contact
-        );
-        assert!(
-            r.min_self >= c.self_collision,
-            "{}: self clearance {:.4} m at t = {} ({:?})",
-            d.id,
-            r.min_self,
-            r.min_self_t,
-            r.self_contact
-        );
-        assert_eq!(r.limit_violation, None, "{}", d.id);
-        assert!(
-            r.max_speed_ratio <= 1.0 + LIMIT_TOLERANCE,
-            "{}: speed {} at {:?}",
-            d.id,
-            r.max_speed_ratio,
-            r.max_speed_at
-        );
-        assert!(
-            r.max_acceleration_ratio <= 1.0 + LIMIT_TOLERANCE,
-            "{}: acceleration {} at {:?}",
-            d.id,
-            r.max_acceleration_ratio,
-            r.max_acceleration_at
-        );
         min_clearance = min_clearance.min(r.min_world);
-
-        check_grip_events(&world, &model, d);
-        // Starts and ends at home, arm folded.
-        let home = [world.home.x, world.home.y, world.home.yaw_deg.to_radians()];
-        for s in [&d.samples[0], d.samples.last().expect("samples")] {
-            for k in 0..3 {
-                assert!(
-                    (s.base[k] - home[k]).abs() < 1e-9
-                        || k == 2 && (prf_shared::se3::wrap(s.base[k] - home[k])).abs() < 1e-9,
-                    "{}",
-                    d.id
-                );
-            }
-            assert!(
-                (JointVector::from(s.arm) - JointVector::from(model.home)).norm() < 1e-9,
-                "{}",
-                d.id
-            );
-        }
-        // Away from singularities, on one elbow branch: the arm motions are RDMP-trainable.
-        for smp in &d.samples {
-            let kin = ArmKinematics::new(&model, &JointVector::from(smp.arm));
-            let w = kernel(&kin.jacobian(&model)).manipulability;
-            min_manipulability = min_manipulability.min(w);
-            assert!(
-                w > 2.0 * RdmpConfig::default().min_manipulability,
-                "{}: manipulability {w} at t = {}",
-                d.id,
-                smp.t
-            );
-            assert!(
-                smp.arm[3] < 0.0,
-                "{}: a4 = {} at t = {}",
-                d.id,
-                smp.arm[3],
-                smp.t
-            );
-        }
-        // The base drives only with the arm at home.
-        for w in d.samples.windows(2) {
-            let base_moves = (0..3).any(|k| (w[1].base[k] - w[0].base[k]).abs() > 1e-9);
-            let arm_home =
-                (JointVector::from(w[0].arm) - JointVector::from(model.home)).norm() < 1e-9;
-            assert!(
-                !base_moves || arm_home,
-                "{}: base moves at t = {} with the arm out",
-                d.id,
-                w[0].t
-            );
-        }
+        min_manipulability = min_manipulability.min(check_program(&world, &model, d, r));
     }
     let configurations: usize = reports.iter().map(|r| r.configurations).sum();
     println!(
@@ -198,6 +214,63 @@ fn generation_is_deterministic_for_a_seed() {
             (&y.task.part, &y.task.from, &y.task.to, y.task.goal)
         );
     }
+}
+
+/// `prf gen --vary`: the same afforded task taught four times gives four different arm
+/// motions (other speeds, pre-grasp distance, via points), each passing the same
+/// independent re-check as the example's programs; the same seed gives the same archive.
+#[test]
+fn an_archive_teaches_each_program_its_own_way() {
+    let world = World::example();
+    let model = RobotModel::kmr_iiwa14();
+    let (cnc_to_table, printer_to_cnc) = (world.afforded_tasks()[13], world.afforded_tasks()[40]);
+    let selection = [[cnc_to_table; 4], [printer_to_cnc; 4]].concat();
+    let quiet = &prf_files::progress::quiet;
+    let archive = generate_archive(&world, &selection, 3, 100.0, quiet).expect("archive");
+    assert!(
+        archive == generate_archive(&world, &selection, 3, 100.0, quiet).expect("again"),
+        "same seed, same archive"
+    );
+    let cell = Cell::new(&world, &model);
+    let limits = MotionLimits::kmr_iiwa(&model);
+    for d in &archive.demonstrations {
+        let r = validate::check(&cell, &limits, &d.samples, 0.001);
+        check_program(&world, &model, d, &r);
+    }
+    // The first arm motion (home to the pre-grasp and on to the grasp) of each program.
+    let reach = |d: &Demonstration| -> Vec<[f64; 7]> {
+        let home = JointVector::from(model.home);
+        let out = |s: &&prf_files::dataset::Sample| (JointVector::from(s.arm) - home).norm() > 1e-9;
+        let first = d
+            .samples
+            .iter()
+            .position(|s| out(&s))
+            .expect("the arm moves");
+        let back = first
+            + d.samples[first..]
+                .iter()
+                .position(|s| s.gripper > 0.5)
+                .expect("grip");
+        d.samples[first..back].iter().map(|s| s.arm).collect()
+    };
+    for same in archive.demonstrations.chunks(4) {
+        let reaches: Vec<_> = same.iter().map(reach).collect();
+        for i in 0..4 {
+            for j in i + 1..4 {
+                assert_ne!(
+                    reaches[i], reaches[j],
+                    "{} and {} teach the same reach",
+                    same[i].id, same[j].id
+                );
+            }
+        }
+    }
+    let plain = generate_dataset(&world, &selection[..2], 3, 100.0, quiet).expect("plain");
+    assert_eq!(
+        reach(&plain.demonstrations[0]),
+        reach(&plain.demonstrations[1]),
+        "without --vary a task taught again is the same reach"
+    );
 }
 
 #[test]

@@ -5,9 +5,11 @@
 mod common;
 
 use common::TempDir;
-use prf_files::dataset::Dataset;
+use prf_files::dataset::{Dataset, DatasetDir, ErrorKind};
 use prf_learn::kb::{HEADER, KbError};
-use prf_learn::learn::{LearnError, Learner, fingerprint, learn_into, learn_lessons_into};
+use prf_learn::learn::{
+    LearnError, Learner, fingerprint, learn_dir, learn_into, learn_lessons_into,
+};
 use prf_learn::{LearnConfig, compile, learn};
 use prf_shared::robot::RobotModel;
 use prf_sim::demogen::generate_dataset;
@@ -73,6 +75,49 @@ fn a_saved_learner_adds_demonstrations_as_batch_learning_does() {
     let ids: Vec<&str> = loaded.ids().iter().map(|(id, _)| id.as_str()).collect();
     let expected: Vec<&str> = ds.demonstrations.iter().map(|d| d.id.as_str()).collect();
     assert_eq!(ids, expected);
+}
+
+/// Learning a dataset directory a chunk at a time (what `prf learn DATASET` does, holding
+/// one chunk's programs) gives batch learning's blob and knowledge base byte for byte, for
+/// every chunk size; a fault in a later chunk is reported with its file and line.
+#[test]
+fn learning_in_chunks_gives_the_batch_blob_and_knowledge_base() {
+    let model = RobotModel::kmr_iiwa14();
+    let cfg = LearnConfig::default();
+    let tmp = TempDir::new("chunks");
+    let dir = tmp.path().join("dataset");
+    dataset().write(&dir).unwrap();
+    // The reference learns the dataset as read back (the files keep 9 decimals).
+    let ds = Dataset::read(&dir, &model).unwrap();
+    let mut batch = Learner::new(&ds, &model, &cfg).unwrap();
+    let blob = compile(&learn_into(&mut batch, &ds.demonstrations, &|_| {}).unwrap()).unwrap();
+    let kb = batch.save().unwrap();
+    let opened = DatasetDir::open(&dir).unwrap();
+    assert_eq!(opened.len(), ds.demonstrations.len());
+    for chunk in [1, 2, 5, 32] {
+        let (k, mut learner) = learn_dir(&opened, &model, &cfg, chunk, &|_| {}).unwrap();
+        assert!(
+            compile(&k).unwrap() == blob,
+            "chunks of {chunk}: the batch blob"
+        );
+        assert!(
+            learner.save().unwrap() == kb,
+            "chunks of {chunk}: the batch knowledge base"
+        );
+    }
+    // A trajectory of the last chunk with a letter for a joint angle, on line 40.
+    let csv = dir.join("d004.csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut fields: Vec<String> = lines[39].split(',').map(str::to_string).collect();
+    fields[5] = "x".into();
+    lines[39] = fields.join(",");
+    std::fs::write(&csv, lines.join("\n") + "\n").unwrap();
+    let Err(LearnError::Dataset(e)) = learn_dir(&opened, &model, &cfg, 2, &|_| {}) else {
+        panic!("a bad number in the last chunk is refused");
+    };
+    assert_eq!((e.file.as_path(), e.line), (csv.as_path(), Some(40)));
+    assert!(matches!(e.kind, ErrorKind::BadNumber { .. }), "{e}");
 }
 
 /// `prf learn --add` appends an addition instead of rewriting the file: a knowledge base with

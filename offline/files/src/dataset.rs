@@ -106,6 +106,67 @@ pub struct Dataset {
     pub demonstrations: Vec<Demonstration>,
 }
 
+/// A dataset directory whose manifest is read and checked, its demonstrations read when
+/// asked for, a range at a time: what learning a plant's archive streams through, holding
+/// only the programs it is learning from at once.
+pub struct DatasetDir {
+    dir: PathBuf,
+    manifest: Manifest,
+}
+
+impl DatasetDir {
+    /// The dataset in `dir`, its manifest read and checked ([`parse_manifest`]).
+    pub fn open(dir: &Path) -> Result<Self, DatasetError> {
+        let mpath = dir.join(MANIFEST);
+        let manifest = parse_manifest(&mpath, &read_text(&mpath)?)?;
+        Ok(DatasetDir {
+            dir: dir.to_path_buf(),
+            manifest,
+        })
+    }
+
+    /// How many demonstrations the manifest lists.
+    pub fn len(&self) -> usize {
+        self.manifest.demonstrations.len()
+    }
+
+    /// Whether the manifest lists no demonstration.
+    pub fn is_empty(&self) -> bool {
+        self.manifest.demonstrations.is_empty()
+    }
+
+    /// The dataset without its demonstrations: robot, r_d, parts and locations.
+    pub fn header(&self) -> Dataset {
+        let mut manifest = self.manifest.clone();
+        manifest.demonstrations = Vec::new();
+        Dataset::of(manifest, Vec::new())
+    }
+
+    /// Demonstrations `range` of the manifest, read and checked against `model`'s joint
+    /// limits on all cores; the first fault in manifest order is the one reported.
+    pub fn read(
+        &self,
+        range: std::ops::Range<usize>,
+        model: &RobotModel,
+    ) -> Result<Vec<Demonstration>, DatasetError> {
+        self.manifest.demonstrations[range]
+            .par_iter()
+            .map(|entry| {
+                let (tpath, cpath) = (self.dir.join(&entry.task), self.dir.join(&entry.trajectory));
+                let task = parse_task(&tpath, &read_text(&tpath)?, &self.manifest)?;
+                let samples = parse_trajectory(&cpath, &read_text(&cpath)?, model)?;
+                Ok(Demonstration {
+                    id: entry.id.clone(),
+                    task,
+                    samples,
+                })
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect()
+    }
+}
+
 /// A dataset read, its numbers parsed, not yet checked against a robot ([`Dataset::parse`]).
 /// What failed to read or parse is kept, in file order, for [`ParsedDataset::check`].
 pub struct ParsedDataset {
@@ -297,20 +358,11 @@ fn valid_pose(p: &[f64; 7]) -> bool {
 impl Dataset {
     /// Reads and validates the dataset in `dir` against the robot's joint limits.
     pub fn read(dir: &Path, model: &RobotModel) -> Result<Dataset, DatasetError> {
-        let mpath = dir.join(MANIFEST);
-        let manifest = parse_manifest(&mpath, &read_text(&mpath)?)?;
-        let mut demonstrations = Vec::with_capacity(manifest.demonstrations.len());
-        for entry in &manifest.demonstrations {
-            let (tpath, cpath) = (dir.join(&entry.task), dir.join(&entry.trajectory));
-            let task = parse_task(&tpath, &read_text(&tpath)?, &manifest)?;
-            let samples = parse_trajectory(&cpath, &read_text(&cpath)?, model)?;
-            demonstrations.push(Demonstration {
-                id: entry.id.clone(),
-                task,
-                samples,
-            });
-        }
-        Ok(Dataset::of(manifest, demonstrations))
+        let opened = DatasetDir::open(dir)?;
+        let demonstrations = opened.read(0..opened.len(), model)?;
+        let mut ds = opened.header();
+        ds.demonstrations = demonstrations;
+        Ok(ds)
     }
 
     /// The dataset in `dir` read and its numbers parsed, to be checked against a robot's

@@ -4,7 +4,7 @@
 use crate::affordance::AffordanceSet;
 use crate::skills::{self, ArmSkill, Skill};
 use crate::workspace::{self, LearnedField, PathSphere, Sweep, SweptPath, WorkspaceConfig};
-use prf_files::dataset::{Dataset, Demonstration, Placed};
+use prf_files::dataset::{Dataset, DatasetDir, Demonstration, Placed};
 use prf_files::{OnProgress, Progress};
 use prf_shared::dmp::DmpParams;
 use prf_shared::kinematics::{ArmKinematics, arm_base_pose, platform_pose};
@@ -193,6 +193,8 @@ pub enum LearnError {
     },
     #[error(transparent)]
     Kb(#[from] crate::kb::KbError),
+    #[error(transparent)]
+    Dataset(#[from] prf_files::dataset::DatasetError),
 }
 
 /// Pose of frame `f` at sample `at` of an instance.
@@ -463,6 +465,49 @@ pub fn learn(
     learn_into(&mut learner, &ds.demonstrations, progress)
 }
 
+/// Demonstrations [`learn_dir`] reads and learns at once: enough to keep every core busy,
+/// few enough that their samples and swept spheres (about 3 MB each on the example cell)
+/// stay far below what learning keeps.
+pub const CHUNK: usize = 32;
+
+/// [`learn`] on the dataset in a directory, read and learned `chunk` demonstrations at a
+/// time (the next chunk read while one is learned): the memory follows what is learned, not
+/// how many programs were read. The same knowledge as [`learn`] on the whole dataset, and
+/// the learner, for a knowledge base.
+pub fn learn_dir(
+    dir: &DatasetDir,
+    model: &RobotModel,
+    cfg: &LearnConfig,
+    chunk: usize,
+    progress: OnProgress<'_>,
+) -> Result<(Knowledge, Learner), LearnError> {
+    let mut learner = Learner::new(&dir.header(), model, cfg)?;
+    let types = learner.location_kinds.len();
+    progress(Progress::Total((dir.len() + types) as u64));
+    let chunk = chunk.max(1);
+    let range = |start: usize| start..(start + chunk).min(dir.len());
+    let ((), t_lessons) = {
+        let mut next = (!dir.is_empty()).then(|| dir.read(range(0), model));
+        let mut start = 0;
+        let t0 = Instant::now();
+        while let Some(demos) = next.take() {
+            let demos = demos?;
+            start += demos.len();
+            let (read, absorbed) = rayon::join(
+                || (start < dir.len()).then(|| dir.read(range(start), model)),
+                || learner.absorb(&demos, progress),
+            );
+            absorbed?;
+            next = read;
+        }
+        ((), t0.elapsed().as_secs_f64())
+    };
+    let (knowledge, t_fields) = timed(|| learner.knowledge(progress));
+    let mut knowledge = knowledge?;
+    knowledge.timings = vec![("lessons", t_lessons), ("workspaces", t_fields)];
+    Ok((knowledge, learner))
+}
+
 /// [`learn`] into an existing learner: `demos`' lessons (in parallel), added in order, then
 /// the fields of the location types they touch rebuilt (`prf learn --add`, [`crate::kb`]).
 pub fn learn_into(
@@ -553,6 +598,9 @@ pub struct Learner {
     sweeps: Vec<Slot>,
     /// Per location type, the spheres added since the last field build, in order.
     pending: Vec<Vec<Arc<SweptPath>>>,
+    /// Per location type, whether its sweep grew since its field was built
+    /// ([`Learner::absorb`] grows sweeps without building).
+    unbuilt: Vec<bool>,
     /// Per location type, the paths its last field build grew its sweep by and which of
     /// their spheres were new (what an addition records of them, [`Learner::addition`]).
     grown: Vec<Grown>,
@@ -606,6 +654,7 @@ impl Learner {
                 location_kinds.len()
             ],
             pending: vec![Vec::new(); location_kinds.len()],
+            unbuilt: vec![false; location_kinds.len()],
             grown: vec![Grown::default(); location_kinds.len()],
             location_kinds,
             part_kinds,
@@ -1074,6 +1123,7 @@ impl Learner {
             part_types,
             sweeps,
             grown: vec![Grown::default(); types],
+            unbuilt: vec![false; types],
             pending: st
                 .pending
                 .into_iter()
@@ -1130,17 +1180,44 @@ impl Learner {
         Ok(self.assemble())
     }
 
-    /// The first part of [`Learner::knowledge`]: the queued spheres added to their sweeps and
-    /// the fields of the types they touch rebuilt, one type per thread.
+    /// The first part of [`Learner::knowledge`]: the queued spheres added to their sweeps
+    /// ([`Learner::grow_sweeps`]), then the fields of the types whose sweeps grew rebuilt, one
+    /// type per thread.
     fn rebuild(&mut self, progress: OnProgress<'_>) -> Result<(), crate::kb::KbError> {
+        self.grow_sweeps()?;
+        let wc = self.config.workspace;
+        let rebuilt: Vec<(usize, Option<LearnedField>)> = self
+            .sweeps
+            .par_iter_mut()
+            .zip(self.unbuilt.par_iter())
+            .enumerate()
+            .filter(|(_, (_, unbuilt))| **unbuilt)
+            .filter_map(|(t, (slot, _))| Some((t, slot.ready_mut()?)))
+            .map(|(t, sweep)| {
+                let f = workspace::build_field(sweep, &wc);
+                progress(Progress::Done(1));
+                (t, f)
+            })
+            .collect();
+        for (t, f) in rebuilt {
+            self.location_types[t].field = f;
+            self.unbuilt[t] = false;
+        }
+        Ok(())
+    }
+
+    /// The queued spheres of each location type added to its sweep (one type per thread; a
+    /// sweep still in the file is read first), the paths and their new spheres recorded for
+    /// [`Learner::addition`], the queues emptied and the types marked for a field build.
+    fn grow_sweeps(&mut self) -> Result<(), crate::kb::KbError> {
         for t in 0..self.sweeps.len() {
             if !self.pending[t].is_empty() {
                 self.read_sweep(t)?;
             }
         }
-        let (wc, robot) = (self.config.workspace, &self.robot);
-        // Per touched type, in parallel: its new spheres in order, then the field.
-        let rebuilt: Vec<(usize, Option<LearnedField>, Grown)> = self
+        let robot = &self.robot;
+        let wc = self.config.workspace;
+        let grown: Vec<(usize, Grown)> = self
             .sweeps
             .par_iter_mut()
             .zip(self.pending.par_iter_mut())
@@ -1156,16 +1233,40 @@ impl Learner {
                 let fresh = sweep.grow(robot, &paths, known.field.as_ref(), &wc);
                 let grown = Grown::new(pending, fresh);
                 pending.clear();
-                let f = workspace::build_field(sweep, &wc);
-                progress(Progress::Done(1));
-                (t, f, grown)
+                (t, grown)
             })
             .collect();
-        for (t, f, grown) in rebuilt {
-            self.location_types[t].field = f;
+        for (t, grown) in grown {
             self.grown[t] = grown;
+            self.unbuilt[t] = true;
         }
         Ok(())
+    }
+
+    /// Learns `demos` (Alg. 3 lines 5–16, in parallel; `progress` told of each) and adds
+    /// them in order, their spheres moved into the sweeps at once: [`learn_into`] but for
+    /// the fields, which the next [`Learner::knowledge`] builds. Nothing of `demos` is kept,
+    /// so learning a dataset a chunk at a time ([`learn_dir`]) holds one chunk's programs
+    /// and lessons, not the dataset's. On an error the learner is left part-way: drop it.
+    fn absorb(
+        &mut self,
+        demos: &[Demonstration],
+        progress: OnProgress<'_>,
+    ) -> Result<(), LearnError> {
+        let lessons = demos
+            .par_iter()
+            .map(|d| {
+                let l = self.lessons(d);
+                progress(Progress::Done(1));
+                l
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect::<Result<Vec<Lessons>, LearnError>>()?;
+        for l in &lessons {
+            self.add(l);
+        }
+        Ok(self.grow_sweeps()?)
     }
 
     /// The rest of [`Learner::knowledge`]: the knowledge as it stands, K after share().

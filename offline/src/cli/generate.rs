@@ -4,7 +4,7 @@ use crate::cli::args::WorldArgs;
 use crate::cli::progress::Bar;
 use anyhow::{Context, bail};
 use prf_shared::robot::RobotModel;
-use prf_sim::demogen::generate_dataset;
+use prf_sim::demogen::{generate_archive, generate_dataset};
 use prf_sim::world::AffordedTask;
 use prf_sim::world::floorplan::floorplan_svg;
 use prf_sim::world::geometry::Cell;
@@ -28,6 +28,11 @@ pub struct Args {
     /// Seed of the planners (and of --random).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Teach each program its own way (arm speeds, pre-grasp distance, a via point), as an
+    /// archive holds a task taught again on another day; without it every program of an
+    /// afforded task is the same motion.
+    #[arg(long)]
+    pub vary: bool,
     /// Sample rate of the trajectories, Hz.
     #[arg(long, default_value_t = 100.0)]
     pub rate: f64,
@@ -96,7 +101,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     let bar = Bar::new("generating", "demonstrations", args.quiet);
     let start = Instant::now();
-    let dataset = generate_dataset(&world, &selection, args.seed, args.rate, &|p| bar.report(p))?;
+    let generate = if args.vary {
+        generate_archive
+    } else {
+        generate_dataset
+    };
+    let dataset = generate(&world, &selection, args.seed, args.rate, &|p| bar.report(p))?;
     bar.finish();
     dataset
         .write(&args.output)

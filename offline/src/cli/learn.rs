@@ -2,10 +2,10 @@
 
 use crate::cli::progress::Bar;
 use anyhow::Context;
-use prf_files::dataset::Dataset;
+use prf_files::dataset::{Dataset, DatasetDir};
 use prf_files::robot;
 use prf_learn::learn::{
-    KbFile, Learner, fingerprint, learn_into, learn_lessons_into, skills_per_class,
+    CHUNK, KbFile, Learner, fingerprint, learn_dir, learn_lessons_into, skills_per_class,
 };
 use prf_learn::{LearnConfig, compile, report};
 use std::path::PathBuf;
@@ -94,8 +94,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         (Some(u), Some(s)) => robot::load(u, s)?,
         _ => robot::example()?,
     };
-    let ds = Dataset::read(dataset, &model)?;
-    let t_read = t0.elapsed().as_secs_f64();
+    let dir = DatasetDir::open(dataset)?;
     let mut cfg = LearnConfig {
         clearance_demo: a.clearance_demo,
         clearance_acceptable: a.clearance,
@@ -105,10 +104,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     cfg.workspace.far = a.far;
     cfg.workspace.certify_margin = a.margin;
     let bar = Bar::new("learning", "units", a.quiet);
-    let t1 = Instant::now();
-    let mut learner = Learner::new(&ds, &model, &cfg)?;
-    let k = learn_into(&mut learner, &ds.demonstrations, &|p| bar.report(p))?;
-    let t_learn = t1.elapsed().as_secs_f64();
+    let (k, mut learner) = learn_dir(&dir, &model, &cfg, CHUNK, &|p| bar.report(p))?;
+    let t_learn = t0.elapsed().as_secs_f64();
     bar.finish();
     let t2 = Instant::now();
     let bytes = compile(&k)?;
@@ -146,7 +143,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     print!("{}", report(&bytes)?);
     println!(
-        "time: read {t_read:.2} s, learn {t_learn:.2} s ({}), compile {t_compile:.3} s",
+        "time: read and learn {t_learn:.2} s ({}), compile {t_compile:.3} s",
         k.timings
             .iter()
             .map(|(n, t)| format!("{n} {t:.2} s"))

@@ -31,7 +31,8 @@ pub struct GenerateError {
     pub total: usize,
 }
 
-/// Generates the selected demonstrations (in parallel, deterministic for a seed).
+/// Generates the selected demonstrations (in parallel, deterministic for a seed), every
+/// program of an afforded task the same motion.
 pub fn generate_dataset(
     world: &World,
     selection: &[AffordedTask],
@@ -39,9 +40,34 @@ pub fn generate_dataset(
     rate_hz: f64,
     progress: OnProgress<'_>,
 ) -> Result<Dataset, GenerateError> {
+    generate(world, selection, seed, rate_hz, false, progress)
+}
+
+/// [`generate_dataset`] as an archive holds the programs: each taught its own way
+/// ([`GenConfig::vary`]: other speeds, pre-grasp distance and via points), so a task taught
+/// again is another motion, not a copy.
+pub fn generate_archive(
+    world: &World,
+    selection: &[AffordedTask],
+    seed: u64,
+    rate_hz: f64,
+    progress: OnProgress<'_>,
+) -> Result<Dataset, GenerateError> {
+    generate(world, selection, seed, rate_hz, true, progress)
+}
+
+fn generate(
+    world: &World,
+    selection: &[AffordedTask],
+    seed: u64,
+    rate_hz: f64,
+    vary: bool,
+    progress: OnProgress<'_>,
+) -> Result<Dataset, GenerateError> {
     let model = RobotModel::kmr_iiwa14();
     let mut cfg = GenConfig::new(MotionLimits::kmr_iiwa(&model));
     cfg.rate_hz = rate_hz;
+    cfg.vary = vary;
     let generator = Generator::new(world, &model, cfg);
     progress(Progress::Total(selection.len() as u64));
     let results: Vec<_> = selection

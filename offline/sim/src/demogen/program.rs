@@ -51,6 +51,10 @@ pub struct GenConfig {
     pub limits: MotionLimits,
     pub ik: IkConfig,
     pub rrt: RrtConfig,
+    /// Whether each program is taught its own way, as an archive holds the same task taught
+    /// again on another day ([`Style::drawn`]): off, every program of a task is the same
+    /// motion (the example cell's dataset).
+    pub vary: bool,
 }
 
 impl GenConfig {
@@ -70,6 +74,61 @@ impl GenConfig {
             limits,
             ik: IkConfig::default(),
             rrt: RrtConfig::default(),
+            vary: false,
+        }
+    }
+}
+
+/// How one program's reaches are taught: speeds, pre-grasp distance and whether the PTP
+/// path passes a via point of the programmer's choosing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Style {
+    /// Fraction of the joint speed limits of the PTP motion.
+    arm_speed: f64,
+    /// Fraction of the joint speed limits of the straight approach.
+    approach_speed: f64,
+    /// Pre-grasp distance back along the tool axis, m.
+    approach_distance: f64,
+    /// A via point at this fraction of the way home → pre-grasp, moved by this many rad per
+    /// joint (each of [−1, 1]).
+    via: Option<(f64, [f64; NA])>,
+}
+
+/// Most attempts at a drawn style's reach before the programmer falls back to the plain
+/// one (a via point may leave no collision-free blend).
+const STYLE_ATTEMPTS: usize = 4;
+
+/// Largest move of a via point off the straight path, rad per joint.
+const VIA_SPREAD: f64 = 0.35;
+
+impl Style {
+    /// The configured speeds and distance, no via point: every program the same.
+    fn plain(cfg: &GenConfig) -> Self {
+        Style {
+            arm_speed: cfg.arm_speed,
+            approach_speed: cfg.approach_speed,
+            approach_distance: cfg.approach_distance,
+            via: None,
+        }
+    }
+
+    /// A style drawn from `rng` around the plain one: PTP speed × [0.6, 1.2], approach speed
+    /// × [0.6, 1.3], pre-grasp distance × [0.8, 1.3], and a via point on three of four.
+    fn drawn(cfg: &GenConfig, rng: &mut StdRng) -> Self {
+        use rand::RngExt;
+        let arm_speed = cfg.arm_speed * rng.random_range(0.6..1.2);
+        let approach_speed = cfg.approach_speed * rng.random_range(0.6..1.3);
+        let approach_distance = cfg.approach_distance * rng.random_range(0.8..1.3);
+        let via = rng.random_bool(0.75).then(|| {
+            let at = rng.random_range(0.3..0.7);
+            let off: [f64; NA] = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+            (at, off)
+        });
+        Style {
+            arm_speed,
+            approach_speed,
+            approach_distance,
+            via,
         }
     }
 }
@@ -270,13 +329,15 @@ impl<'w> Generator<'w> {
         }
     }
 
-    /// Plans the reach to grasp `grasp` of the part at location `loc` from `approach`.
+    /// Plans the reach to grasp `grasp` of the part at location `loc` from `approach`, taught
+    /// in `style`.
     fn reach(
         &self,
         loc: usize,
         approach: usize,
         part_type: usize,
         grasp: usize,
+        style: &Style,
         rng: &mut StdRng,
     ) -> Result<Reach, GenError> {
         let w = self.world;
@@ -294,7 +355,7 @@ impl<'w> Generator<'w> {
             * w.part_types[part_type].grasps[grasp].tcp.pose();
         let tcp_pre = tcp_grasp
             * Isometry3::from_parts(
-                Translation3::new(0.0, 0.0, -self.cfg.approach_distance),
+                Translation3::new(0.0, 0.0, -style.approach_distance),
                 nalgebra::UnitQuaternion::identity(),
             );
         let space = self.space(base);
@@ -317,22 +378,34 @@ impl<'w> Generator<'w> {
             }
         })
         .map_err(|e| ik_err("pre-grasp", e))?;
-        let path =
-            rrt::plan(&space, model.home, q_pre.into(), &self.cfg.rrt, rng).map_err(|error| {
-                GenError::Plan {
-                    location: name.clone(),
-                    error,
-                }
-            })?;
+        let plan = |from: [f64; NA], to: [f64; NA], rng: &mut StdRng| {
+            rrt::plan(&space, from, to, &self.cfg.rrt, rng).map_err(|error| GenError::Plan {
+                location: name.clone(),
+                error,
+            })
+        };
+        let path = match style.via {
+            None => plan(model.home, q_pre.into(), rng)?,
+            Some((at, off)) => {
+                let q_pre: [f64; NA] = q_pre.into();
+                let via: [f64; NA] = std::array::from_fn(|j| {
+                    let q = model.home[j] + (q_pre[j] - model.home[j]) * at + VIA_SPREAD * off[j];
+                    q.clamp(model.joints[j].lower, model.joints[j].upper)
+                });
+                let mut path = plan(model.home, via, rng)?;
+                path.extend(plan(via, q_pre, rng)?.into_iter().skip(1));
+                path
+            }
+        };
         let approach_path = [q_pre.into(), q_grasp.into()];
         let approach = Motion::new(
             &approach_path,
-            &self.arm_limits(self.cfg.approach_speed),
+            &self.arm_limits(style.approach_speed),
             false,
         );
         // Blended PTP path, or exact stops at the via points if the blends cut a corner too
         // close to an obstacle.
-        let limits = self.arm_limits(self.cfg.arm_speed);
+        let limits = self.arm_limits(style.arm_speed);
         let arm_ok = |m: &Motion<NA>| {
             self.piece_ok(Piece::Arm {
                 base,
@@ -450,18 +523,41 @@ impl<'w> Generator<'w> {
             .collect()
     }
 
-    /// Generates the program of one afforded task; `seed` fixes the planner's random choices.
+    /// Generates the program of one afforded task; `seed` fixes the planner's random choices
+    /// (and, with [`GenConfig::vary`], the style of each reach: up to [`STYLE_ATTEMPTS`]
+    /// drawn ones, then the plain one, so a style that leaves no valid program is not fatal).
     pub fn generate(
         &self,
         a: &AffordedTask,
         seed: u64,
     ) -> Result<(TaskRecord, Vec<Sample>), GenError> {
+        let mut rng = StdRng::seed_from_u64(seed);
+        if self.cfg.vary {
+            for _ in 0..STYLE_ATTEMPTS {
+                let styles = [(); 2].map(|_| Style::drawn(&self.cfg, &mut rng));
+                if let Ok(program) = self.generate_in(a, seed, &styles, &mut rng) {
+                    return Ok(program);
+                }
+            }
+        }
+        let plain = Style::plain(&self.cfg);
+        self.generate_in(a, seed, &[plain, plain], &mut rng)
+    }
+
+    /// [`Generator::generate`] with the pick and the place taught in `styles`.
+    fn generate_in(
+        &self,
+        a: &AffordedTask,
+        seed: u64,
+        styles: &[Style; 2],
+        rng: &mut StdRng,
+    ) -> Result<(TaskRecord, Vec<Sample>), GenError> {
         let w = self.world;
         let t = a.task;
         let part_type = w.part_type_index(&w.parts[t.part].kind).unwrap_or(0);
-        let mut rng = StdRng::seed_from_u64(seed);
-        let mut pick = self.reach(t.from, a.approach_from, part_type, a.grasp, &mut rng)?;
-        let mut place = self.reach(t.to, a.approach_to, part_type, a.grasp, &mut rng)?;
+        let [pick_style, place_style] = styles;
+        let mut pick = self.reach(t.from, a.approach_from, part_type, a.grasp, pick_style, rng)?;
+        let mut place = self.reach(t.to, a.approach_to, part_type, a.grasp, place_style, rng)?;
         let home = [w.home.x, w.home.y, w.home.yaw_deg.to_radians()];
         let exit1 = self.exit_path(t.from, a.approach_from);
         let exit2 = self.exit_path(t.to, a.approach_to);
