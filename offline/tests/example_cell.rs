@@ -273,6 +273,39 @@ fn an_archive_teaches_each_program_its_own_way() {
     );
 }
 
+/// The built-in plant's archive (`prf gen --world plant --vary`): programs at its new
+/// location type (the conveyor) and with its third part type, each taught its own way, pass
+/// the same independent re-check against the plant's true geometry.
+#[test]
+fn the_plants_programs_keep_r_d_and_do_their_tasks() {
+    let world = World::plant();
+    let model = RobotModel::kmr_iiwa14();
+    let afforded = world.afforded_tasks();
+    let labels = [
+        "Part3 Conveyor1.front -> CNC3.side, grasp angle",
+        "Part1 CNC2.front -> Conveyor3.front, grasp top",
+        "Part2 Table3.side -> Printer3.front, grasp top",
+        "Part3 Printer1.front -> Conveyor2.front, grasp top",
+    ];
+    let selection: Vec<_> = labels
+        .iter()
+        .map(|l| {
+            *afforded
+                .iter()
+                .find(|a| world.label(a) == *l)
+                .unwrap_or_else(|| panic!("{l} is an afforded task of the plant"))
+        })
+        .collect();
+    let quiet = &prf_files::progress::quiet;
+    let archive = generate_archive(&world, &selection, 5, 100.0, quiet).expect("plant archive");
+    let cell = Cell::new(&world, &model);
+    let limits = MotionLimits::kmr_iiwa(&model);
+    for d in &archive.demonstrations {
+        let r = validate::check(&cell, &limits, &d.samples, 0.001);
+        check_program(&world, &model, d, &r);
+    }
+}
+
 #[test]
 fn sample_rate_is_configurable() {
     let world = World::example();

@@ -62,6 +62,43 @@ fn line_with(text: &str, needle: &str) -> usize {
         + 1
 }
 
+/// The built-in plant (`--world plant`): twelve locations of four types, three part types,
+/// tasks between every ordered pair of distinct locations; at every stance the platform keeps
+/// the 60 mm the stances are designed with from every box of the plant, neighbours included.
+#[test]
+fn the_plant_has_twelve_locations_of_four_types_and_tasks_between_every_pair() {
+    let w = World::plant();
+    assert_eq!(w.locations.len(), 12);
+    assert_eq!(w.location_types.len(), 4);
+    assert_eq!(w.part_types.len(), 3);
+    for t in &w.location_types {
+        let n = w.locations.iter().filter(|l| l.kind == t.name).count();
+        assert_eq!(n, 3, "{} instances of {}", n, t.name);
+    }
+    let tasks = w.tasks();
+    assert_eq!(tasks.len(), 3 * 12 * 11);
+    let mut pairs: Vec<_> = tasks.iter().map(|t| (t.part, t.from, t.to)).collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    assert_eq!(pairs.len(), tasks.len(), "each task once");
+    assert!(tasks.iter().all(|t| t.from != t.to));
+    let cell = Cell::new(&w, &RobotModel::kmr_iiwa14());
+    for (i, loc) in w.locations.iter().enumerate() {
+        for a in &w.location_type(i).approaches {
+            let p = w.location_pose(i) * a.stance.pose();
+            let r = cell.clearance(planar(&p), &cell.model.home);
+            assert!(
+                r.world >= 0.06 - 1e-9,
+                "{} {}: {} {:?}",
+                loc.id,
+                a.name,
+                r.world,
+                r.world_contact
+            );
+        }
+    }
+}
+
 #[test]
 fn world_errors_name_file_line_and_value() {
     let good = prf_sim::world::EXAMPLE_WORLD;

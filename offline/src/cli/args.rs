@@ -143,16 +143,18 @@ impl PacingArgs {
 
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct WorldArgs {
-    /// World file (JSON: floor plan, location poses, the platform's home, obstacles, parts);
+    /// World file (JSON: floor plan, location poses, the platform's home, obstacles, parts),
+    /// or `plant` for the built-in plant (twelve locations of four types, three part types);
     /// default: the built-in example cell.
     #[arg(long)]
     pub world: Option<PathBuf>,
 }
 
 impl WorldArgs {
-    /// Loads `--world`, or the built-in example.
+    /// Loads `--world` (a file, or the built-in `plant`), or the built-in example.
     pub fn load(&self) -> anyhow::Result<World> {
         match &self.world {
+            Some(p) if p.as_os_str() == "plant" && !p.exists() => Ok(World::plant()),
             Some(p) => Ok(World::load(p)?),
             None => Ok(World::example()),
         }

@@ -49,6 +49,11 @@ macro_rules! invalid {
 pub const EXAMPLE_WORLD: &str = include_str!("../../../data/example-world.json");
 /// Name shown for the built-in world in messages.
 pub const EXAMPLE_WORLD_NAME: &str = "<built-in example-world.json>";
+/// The built-in plant: twelve locations of four types, three part types
+/// (`offline/data/plant-world.json`, `--world plant`).
+pub const PLANT_WORLD: &str = include_str!("../../../data/plant-world.json");
+/// Name shown for the built-in plant in messages.
+pub const PLANT_WORLD_NAME: &str = "<built-in plant-world.json>";
 
 /// Value of the `format` field.
 pub const FORMAT: &str = "prf-world";
@@ -69,9 +74,31 @@ pub struct World {
     pub part_types: Vec<PartType>,
     pub locations: Vec<Location>,
     pub parts: Vec<Part>,
+    /// Which tasks the cell has ([`World::tasks`]).
+    #[serde(default, skip_serializing_if = "TaskRule::is_first_instances")]
+    pub tasks: TaskRule,
     /// Where the world was read from (for messages).
     #[serde(skip)]
     pub source: PathBuf,
+}
+
+/// Which location instances a cell's tasks run between.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TaskRule {
+    /// Per ordered pair of location types, from the first instance of the first type to the
+    /// first other instance of the second (the example cell's 18 tasks).
+    #[default]
+    FirstInstances,
+    /// Between every ordered pair of distinct location instances (a plant, whose archive
+    /// holds programs between all its machines).
+    EveryPair,
+}
+
+impl TaskRule {
+    fn is_first_instances(&self) -> bool {
+        *self == TaskRule::FirstInstances
+    }
 }
 
 /// Clearances, m.
@@ -225,6 +252,12 @@ impl World {
         // The built-in file is checked by the tests; failing to parse it is a build defect.
         Self::parse(EXAMPLE_WORLD, Path::new(EXAMPLE_WORLD_NAME))
             .expect("the built-in example world is valid")
+    }
+
+    /// The built-in plant ([`PLANT_WORLD`]).
+    pub fn plant() -> World {
+        Self::parse(PLANT_WORLD, Path::new(PLANT_WORLD_NAME))
+            .expect("the built-in plant world is valid")
     }
 
     /// Reads and validates a world file.
@@ -416,11 +449,23 @@ impl World {
         self.location_pose(i) * self.location_type(i).part_pose.pose()
     }
 
-    /// The tasks of the cell: every part between every ordered pair of location types, from
-    /// the first instance of the first type to the first instance of the second type that is
-    /// not the start (so CNC → CNC is CNC1 → CNC2). Parts and locations at nominal poses.
+    /// The tasks of the cell, by its [`TaskRule`]: every part between every ordered pair of
+    /// location types, from the first instance of the first type to the first instance of
+    /// the second type that is not the start (so CNC → CNC is CNC1 → CNC2), or every part
+    /// between every ordered pair of distinct instances. Parts and locations at nominal poses.
     pub fn tasks(&self) -> Vec<Task> {
         let mut out = Vec::new();
+        if self.tasks == TaskRule::EveryPair {
+            let n = self.locations.len();
+            for part in 0..self.parts.len() {
+                for from in 0..n {
+                    for to in (0..n).filter(|&to| to != from) {
+                        out.push(Task { part, from, to });
+                    }
+                }
+            }
+            return out;
+        }
         for part in 0..self.parts.len() {
             for t1 in &self.location_types {
                 for t2 in &self.location_types {
