@@ -52,8 +52,8 @@ pub struct GenConfig {
     pub ik: IkConfig,
     pub rrt: RrtConfig,
     /// Whether each program is taught its own way, as an archive holds the same task taught
-    /// again on another day ([`Style::drawn`]): off, every program of a task is the same
-    /// motion (the example cell's dataset).
+    /// again on another day (other speeds, pre-grasp distance, a via point): off, every
+    /// program of a task is the same motion (the example cell's dataset).
     pub vary: bool,
 }
 
@@ -524,8 +524,8 @@ impl<'w> Generator<'w> {
     }
 
     /// Generates the program of one afforded task; `seed` fixes the planner's random choices
-    /// (and, with [`GenConfig::vary`], the style of each reach: up to [`STYLE_ATTEMPTS`]
-    /// drawn ones, then the plain one, so a style that leaves no valid program is not fatal).
+    /// (and, with [`GenConfig::vary`], the style of each reach: up to four drawn ones, then
+    /// the plain one, so a style that leaves no valid program is not fatal).
     pub fn generate(
         &self,
         a: &AffordedTask,
