@@ -486,22 +486,20 @@ pub fn learn_dir(
     progress(Progress::Total((dir.len() + types) as u64));
     let chunk = chunk.max(1);
     let range = |start: usize| start..(start + chunk).min(dir.len());
-    let ((), t_lessons) = {
-        let mut next = (!dir.is_empty()).then(|| dir.read(range(0), model));
-        let mut start = 0;
-        let t0 = Instant::now();
-        while let Some(demos) = next.take() {
-            let demos = demos?;
-            start += demos.len();
-            let (read, absorbed) = rayon::join(
-                || (start < dir.len()).then(|| dir.read(range(start), model)),
-                || learner.absorb(&demos, progress),
-            );
-            absorbed?;
-            next = read;
-        }
-        ((), t0.elapsed().as_secs_f64())
-    };
+    let t0 = Instant::now();
+    let mut next = (!dir.is_empty()).then(|| dir.read(range(0), model));
+    let mut start = 0;
+    while let Some(demos) = next.take() {
+        let demos = demos?;
+        start += demos.len();
+        let (read, absorbed) = rayon::join(
+            || (start < dir.len()).then(|| dir.read(range(start), model)),
+            || learner.absorb(&demos, progress),
+        );
+        absorbed?;
+        next = read;
+    }
+    let t_lessons = t0.elapsed().as_secs_f64();
     let (knowledge, t_fields) = timed(|| learner.knowledge(progress));
     let mut knowledge = knowledge?;
     knowledge.timings = vec![("lessons", t_lessons), ("workspaces", t_fields)];
