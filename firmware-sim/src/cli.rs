@@ -36,7 +36,7 @@ pub struct Args {
     /// Exit when the parent process exits.
     #[arg(long)]
     pub exit_with_parent: bool,
-    /// World file of the cell (or `example`, the built-in example cell): the platform
+    /// World file of the cell (or `example` or `plant`, a built-in one): the platform
     /// navigates on its floor map. Without one it drives straight lines between goals.
     #[arg(long)]
     pub world: Option<PathBuf>,
@@ -59,8 +59,7 @@ impl Args {
         c.exit_with_parent = self.exit_with_parent;
         c.world = match &self.world {
             None => None,
-            Some(p) if p.as_os_str() == "example" => Some(World::example()),
-            Some(p) => Some(World::load(p)?),
+            Some(p) => Some(World::named(p)?),
         };
         Ok(c)
     }

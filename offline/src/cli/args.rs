@@ -145,17 +145,16 @@ impl PacingArgs {
 pub struct WorldArgs {
     /// World file (JSON: floor plan, location poses, the platform's home, obstacles, parts),
     /// or `plant` for the built-in plant (twelve locations of four types, three part types);
-    /// default: the built-in example cell.
+    /// default: the built-in example cell (`example`).
     #[arg(long)]
     pub world: Option<PathBuf>,
 }
 
 impl WorldArgs {
-    /// Loads `--world` (a file, or the built-in `plant`), or the built-in example.
+    /// Loads `--world` ([`World::named`]), or the built-in example.
     pub fn load(&self) -> anyhow::Result<World> {
         match &self.world {
-            Some(p) if p.as_os_str() == "plant" && !p.exists() => Ok(World::plant()),
-            Some(p) => Ok(World::load(p)?),
+            Some(p) => Ok(World::named(p)?),
             None => Ok(World::example()),
         }
     }

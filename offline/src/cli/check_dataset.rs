@@ -18,7 +18,7 @@ pub struct Args {
     /// Dataset directory (with manifest.json).
     pub dir: PathBuf,
     /// Also re-check every program against a ground-truth world: a world file, or `example`
-    /// for the built-in example cell. Clearance ≥ r_d, self clearance, joint limits, speed and
+    /// or `plant` for a built-in one. Clearance ≥ r_d, self clearance, joint limits, speed and
     /// acceleration limits, densely re-sampled between the stored samples; the held part
     /// (from its recorded start pose, picked up when the gripper closes) keeps r_d from every
     /// box but the surfaces it rests on, and does not sink into those. Columns: drive =
@@ -47,11 +47,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let Some(world) = &args.world else {
         return Ok(());
     };
-    let world = if world == "example" {
-        World::example()
-    } else {
-        World::load(&PathBuf::from(world))?
-    };
+    let world = World::named(&PathBuf::from(world))?;
     for d in &dataset.demonstrations {
         for placed in [&d.task.from, &d.task.to] {
             if world.location_index(&placed.id).is_none() {

@@ -260,6 +260,16 @@ impl World {
             .expect("the built-in plant world is valid")
     }
 
+    /// The world `name` names: `example` or `plant` for a built-in one (unless a file of that
+    /// name exists), otherwise the world file at that path ([`World::load`]).
+    pub fn named(name: &Path) -> Result<World, WorldError> {
+        match name.to_str() {
+            Some("example") if !name.exists() => Ok(World::example()),
+            Some("plant") if !name.exists() => Ok(World::plant()),
+            _ => World::load(name),
+        }
+    }
+
     /// Reads and validates a world file.
     pub fn load(path: &Path) -> Result<World, WorldError> {
         let text = std::fs::read_to_string(path).map_err(|source| WorldError::Read {
