@@ -67,6 +67,9 @@ section "Part-pose envelope, pick side, ±20 mm and ±10°" \
 section "Learned workspaces against the exact Ω+" \
   "how far the conservative field lies above the exact signed distance near the boundary, and the risk term of demonstrated spheres moved by up to 10 mm" \
   "$prf" field-error "$work/ds" --points 1000
+section "Learning against the archive's size (the plant, each program taught its own way)" \
+  "prf learn's wall time, peak memory and blob for 64 and 256 programs of the built-in plant (\\`--n 64,256,1000\\` for the 1,000 point, about 12 min more)" \
+  "$prf" bench-learn --world plant --vary --n 64,256 -o "$work/learn-scale" --quiet
 
 {
   echo "# Benchmarks"

@@ -73,6 +73,10 @@ enum Command {
     /// loop's jitter and deadline misses against firmware-sim (beside a probe thread's: the
     /// machine's own stalls), Ruckig's per-update cost.
     BenchCell(bench::cell::Args),
+    /// Learning against the archive's size: per N programs of a generated archive (`--vary`:
+    /// each taught its own way), `prf learn`'s wall time, peak memory and blob (table, CSV,
+    /// charts).
+    BenchLearn(bench::learn_scale::Args),
     /// Run tasks on the cell-controller firmware (Cortex-M7 under QEMU mps2-an500, blob flashed
     /// into its region) and check each against the host: executor tick, planning and RAM
     /// budgets, and the setpoint stream bit for bit. Installs QEMU and the toolchain if
@@ -108,6 +112,7 @@ fn main() -> anyhow::Result<()> {
         Some(Command::FieldError(args)) => field_error::run(&args),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::BenchCell(args)) => bench::cell::run(&args),
+        Some(Command::BenchLearn(args)) => bench::learn_scale::run(&args),
         Some(Command::Firmware(args)) => firmware::run(&args),
         Some(Command::IpcPeer(args)) => bench::cell::peer(&args),
         Some(Command::FirmwareSim(args)) => Ok(prf_firmware_sim::cli::run(&args)?),

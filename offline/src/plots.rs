@@ -5,7 +5,8 @@
 //! - [`HeatMap`]: a value per cell of a regular grid, cells without a value crossed out
 //!   (Fig. 3ii, the risk over new goals);
 //! - [`Histogram`]: overlaid histograms of two or more samples (Fig. 3iii);
-//! - [`BandPlot`]: per series a mean line over a min–max band (Fig. 5).
+//! - [`BandPlot`]: per series a mean line over a min–max band (Fig. 5);
+//! - [`ScalingPlot`]: a figure against a count, each count ticked (`prf bench-learn`).
 
 use anyhow::{Context, Result, anyhow};
 use plotters::coord::Shift;
@@ -452,6 +453,74 @@ impl Chart for BandPlot<'_> {
                 });
         }
         legend(&mut chart, SeriesLabelPosition::LowerRight)?;
+        Ok(())
+    }
+}
+
+/// A measured value against a count (a figure against the number of programs): the counts
+/// evenly spaced and ticked as they are (sizes that grow by a factor each are spaced as on a
+/// logarithmic axis), a line through the points, each marked and labelled with its value.
+pub struct ScalingPlot<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    /// Legend entry of the line.
+    pub name: &'a str,
+    /// (count, value), ascending counts.
+    pub points: &'a [(usize, f64)],
+}
+
+impl Chart for ScalingPlot<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let k = self.points.len().max(1);
+        let top = self.points.iter().map(|p| p.1).fold(0.0, f64::max);
+        let top = if top > 0.0 { top * 1.2 } else { 1.0 };
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(root)
+            .caption(self.title, ("sans-serif", 18))
+            .margin(24)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d((0..k - 1).into_segmented(), 0.0..top)?;
+        let count = |x: &SegmentValue<usize>| match x {
+            SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => self
+                .points
+                .get(*i)
+                .map_or_else(String::new, |p| p.0.to_string()),
+            SegmentValue::Last => String::new(),
+        };
+        chart
+            .configure_mesh()
+            .x_desc(self.x_label)
+            .y_desc(self.y_label)
+            .x_labels(k)
+            .x_label_formatter(&count)
+            .light_line_style(WHITE.mix(0.0))
+            .draw()?;
+        let colour = Palette99::pick(0).to_rgba();
+        let line = self
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (SegmentValue::CenterOf(i), p.1));
+        chart
+            .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))?
+            .label(self.name)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2)));
+        chart.draw_series(line.map(|(x, v)| {
+            EmptyElement::at((x, v))
+                + Circle::new((0, 0), 4, colour.filled())
+                + Text::new(format!("{v:.1}"), (8, -20), ("sans-serif", 14).into_font())
+        }))?;
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()?;
         Ok(())
     }
 }

@@ -3,5 +3,6 @@
 
 pub mod alloc_count;
 pub mod cell;
+pub mod learn_scale;
 pub mod math;
 pub mod stall_probe;

@@ -66,6 +66,15 @@ fn parse_selection(s: &str, n: usize) -> anyhow::Result<Vec<usize>> {
     Ok(out)
 }
 
+/// `n` of the `afforded` tasks drawn at random with replacement (`prf gen --random N`): the
+/// same draws for the same seed, a longer draw starting with a shorter one's.
+pub fn drawn(afforded: &[AffordedTask], n: usize, seed: u64) -> Vec<AffordedTask> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    (0..n)
+        .map(|_| afforded[rng.random_range(0..afforded.len())])
+        .collect()
+}
+
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let world = args.world.load()?;
     let afforded = world.afforded_tasks();
@@ -87,10 +96,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         bail!("--rate must be positive, got {}", args.rate);
     }
     let selection: Vec<AffordedTask> = if let Some(n) = args.random {
-        let mut rng = StdRng::seed_from_u64(args.seed);
-        (0..n)
-            .map(|_| afforded[rng.random_range(0..afforded.len())])
-            .collect()
+        drawn(&afforded, n, args.seed)
     } else if let Some(s) = &args.only {
         parse_selection(s, afforded.len())?
             .into_iter()
