@@ -82,21 +82,28 @@ fn the_plant_has_twelve_locations_of_four_types_and_tasks_between_every_pair() {
     pairs.dedup();
     assert_eq!(pairs.len(), tasks.len(), "each task once");
     assert!(tasks.iter().all(|t| t.from != t.to));
-    let cell = Cell::new(&w, &RobotModel::kmr_iiwa14());
+    for (stance, r) in stance_clearances(&w) {
+        assert!(
+            r.world >= 0.06 - 1e-9,
+            "{stance}: {} {:?}",
+            r.world,
+            r.world_contact
+        );
+    }
+}
+
+/// Per stance of `w` ("location.approach"), the robot's clearance there with the arm at home.
+fn stance_clearances(w: &World) -> Vec<(String, prf_sim::world::geometry::ClearanceReport)> {
+    let cell = Cell::new(w, &RobotModel::kmr_iiwa14());
+    let mut out = Vec::new();
     for (i, loc) in w.locations.iter().enumerate() {
         for a in &w.location_type(i).approaches {
             let p = w.location_pose(i) * a.stance.pose();
             let r = cell.clearance(planar(&p), &cell.model.home);
-            assert!(
-                r.world >= 0.06 - 1e-9,
-                "{} {}: {} {:?}",
-                loc.id,
-                a.name,
-                r.world,
-                r.world_contact
-            );
+            out.push((format!("{}.{}", loc.id, a.name), r));
         }
     }
+    out
 }
 
 #[test]
@@ -215,26 +222,19 @@ fn platform_clearance_is_exact_at_the_stances() {
     // Every stance of the example world is designed with a 60 mm gap between the platform and
     // the location's nearest box, and the arm at home keeps more than that.
     let w = World::example();
-    let cell = Cell::new(&w, &RobotModel::kmr_iiwa14());
-    for (i, loc) in w.locations.iter().enumerate() {
-        for a in &w.location_type(i).approaches {
-            let p = w.location_pose(i) * a.stance.pose();
-            let r = cell.clearance(planar(&p), &cell.model.home);
-            assert!(
-                (r.world - 0.06).abs() < 1e-9,
-                "{} {}: {} {:?}",
-                loc.id,
-                a.name,
-                r.world,
-                r.world_contact
-            );
-            assert!(
-                matches!(r.world_contact, Contact::Platform { .. }),
-                "{:?}",
-                r.world_contact
-            );
-            assert!(r.self_ > w.clearance.self_collision);
-        }
+    for (stance, r) in stance_clearances(&w) {
+        assert!(
+            (r.world - 0.06).abs() < 1e-9,
+            "{stance}: {} {:?}",
+            r.world,
+            r.world_contact
+        );
+        assert!(
+            matches!(r.world_contact, Contact::Platform { .. }),
+            "{:?}",
+            r.world_contact
+        );
+        assert!(r.self_ > w.clearance.self_collision);
     }
 }
 
