@@ -10,7 +10,7 @@ use crate::cli::progress::Bar;
 use anyhow::{Context, bail};
 use prf_files::dataset::{MANIFEST, Manifest};
 use prf_offline::plots::{self, ScalingPlot};
-use prf_sim::demogen::{generate_archive, generate_dataset};
+use prf_sim::demogen::generate;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
@@ -55,13 +55,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     };
     let world = a.world.load()?;
     let selection = drawn(&world.afforded_tasks(), most, a.seed);
-    let generate = if a.vary {
-        generate_archive
-    } else {
-        generate_dataset
-    };
     let bar = Bar::new("generating", "programs", a.quiet);
-    let archive = generate(&world, &selection, a.seed, 100.0, &|p| bar.report(p))?;
+    let archive = generate(&world, &selection, a.seed, 100.0, a.vary, &|p| {
+        bar.report(p)
+    })?;
     bar.finish();
     let all = a.output.join("archive");
     archive

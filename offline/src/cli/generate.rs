@@ -4,7 +4,7 @@ use crate::cli::args::WorldArgs;
 use crate::cli::progress::Bar;
 use anyhow::{Context, bail};
 use prf_shared::robot::RobotModel;
-use prf_sim::demogen::{generate_archive, generate_dataset};
+use prf_sim::demogen::generate;
 use prf_sim::world::AffordedTask;
 use prf_sim::world::floorplan::floorplan_svg;
 use prf_sim::world::geometry::Cell;
@@ -107,12 +107,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     let bar = Bar::new("generating", "demonstrations", args.quiet);
     let start = Instant::now();
-    let generate = if args.vary {
-        generate_archive
-    } else {
-        generate_dataset
-    };
-    let dataset = generate(&world, &selection, args.seed, args.rate, &|p| bar.report(p))?;
+    let dataset = generate(&world, &selection, args.seed, args.rate, args.vary, &|p| {
+        bar.report(p)
+    })?;
     bar.finish();
     dataset
         .write(&args.output)

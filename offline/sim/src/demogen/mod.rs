@@ -56,7 +56,8 @@ pub fn generate_archive(
     generate(world, selection, seed, rate_hz, true, progress)
 }
 
-fn generate(
+/// [`generate_archive`] when `vary`, otherwise [`generate_dataset`] (`prf gen --vary`).
+pub fn generate(
     world: &World,
     selection: &[AffordedTask],
     seed: u64,

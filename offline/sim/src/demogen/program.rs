@@ -94,8 +94,8 @@ struct Style {
     via: Option<(f64, [f64; NA])>,
 }
 
-/// Most attempts at a drawn style's reach before the programmer falls back to the plain
-/// one (a via point may leave no collision-free blend).
+/// Most drawn styles a program is tried in before the programmer falls back to the plain
+/// one (a via point may leave no collision-free blend, or bring the held part too close).
 const STYLE_ATTEMPTS: usize = 4;
 
 /// Largest move of a via point off the straight path, rad per joint.
