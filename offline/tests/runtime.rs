@@ -371,6 +371,67 @@ fn skill_plan_equals_the_brute_force_grid() {
     );
 }
 
+/// The candidates come in the documented order whatever the page size: per stance, skills
+/// learned at the side's location type first, then by goal distance, then by index. The
+/// reference sorts every skill of the class at once (the planner never holds more than a
+/// page); pages of 1, 7 and 64 skills all give it, on every side of every task of the
+/// example cell, its parts nominal and moved 2 cm and 8°.
+#[test]
+fn candidates_come_in_the_full_sorts_order_in_pages_of_any_size() {
+    use prf_runtime::skill_plan::{ORDER_PAGE, ROTATION_WEIGHT, Side};
+    use prf_shared::se3::angle_between;
+    let rt = Runtime::load(full_blob()).expect("load");
+    let classes = PttClasses::of(&rt).expect("classes");
+    let reference = |side: &Side<'_>, g: usize| -> Vec<(u8, u16)> {
+        let mut out = Vec::new();
+        for s in 0..side.arm_bases.len() {
+            let goal = side.goal(s, g).expect("goal");
+            let mut keys: Vec<(bool, f64, u16)> = (0..rt.blob.payload.skills.len())
+                .filter_map(|k| {
+                    let skill = rt.blob.skill(k).expect("skill");
+                    let r = skill.rdmp.filter(|_| skill.class as usize == side.class)?;
+                    let demo = rt.blob.rdmp_goal(r as usize).expect("goal");
+                    let d = (goal.translation.vector - demo.translation.vector).norm()
+                        + ROTATION_WEIGHT * angle_between(&goal.rotation, &demo.rotation);
+                    let here = skill.location_type == Some(side.location_type as u8);
+                    Some((!here, d, k as u16))
+                })
+                .collect();
+            keys.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
+            out.extend(keys.iter().map(|&(_, _, k)| (s as u8, k)));
+        }
+        out
+    };
+    fn paged<const P: usize>(rt: &Runtime<'_>, side: &Side<'_>, g: usize) -> Vec<(u8, u16)> {
+        let mut v = Vec::new();
+        side.candidates_in::<P>(rt, g, |s, k| {
+            v.push((s, k));
+            true
+        })
+        .expect("order");
+        v
+    }
+    let mut checked = 0;
+    for world in [World::example(), shifted_world(0.02, 8.0)] {
+        for ft in world_tasks(&world) {
+            let task = ft.task();
+            let resolved = task.resolve(&rt).expect("resolve").expect("feasible");
+            let sides = PttSides::new(&rt, &task, &resolved, &classes).expect("sides");
+            for side in [&sides.pick, &sides.place] {
+                for g in 0..sides.grasps {
+                    let full = reference(side, g);
+                    assert_eq!(full.len(), side.arm_bases.len() * side.skills);
+                    assert_eq!(paged::<1>(&rt, side, g), full, "{}: pages of 1", ft.label());
+                    assert_eq!(paged::<7>(&rt, side, g), full, "{}: pages of 7", ft.label());
+                    assert_eq!(paged::<ORDER_PAGE>(&rt, side, g), full, "{}", ft.label());
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked >= 2 * 18 * 2, "{checked} sides and grasps checked");
+}
+
 /// Anchored lookups, and lookups skipped by the travel bound, change how much of the field is
 /// read, never a plan: every task of the example cell on the full knowledge base (risk-0
 /// plans), and on the reduced one with the parts moved 2 cm and 8° (risky plans, rising

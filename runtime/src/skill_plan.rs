@@ -68,8 +68,10 @@ use prf_shared::{JointVector, blob::MAX_AFFORDANCES};
 
 /// The classes a part-transportation plan uses.
 pub const PTT_CLASSES: [&str; 3] = ["Pick", "Place", "Move"];
-/// Maximum skills of one class the planner orders.
-pub const MAX_SKILLS: usize = 256;
+/// Skills ordered per pass over a class ([`Side::candidates`]): the candidates come in pages
+/// of this many, each page one pass over the class's skills, so a class of any size is
+/// ordered in fixed memory (1 KiB), and a search that stops early (risk 0) pays one pass.
+pub const ORDER_PAGE: usize = 64;
 /// Weight of the rotation in the goal distance that orders skills, m/rad.
 pub const ROTATION_WEIGHT: f64 = 0.1;
 /// Maximum (stance, grasp) goals of one side.
@@ -270,8 +272,6 @@ pub enum SkillPlanError {
     Load(LoadError),
     /// The action plan is not Move, Pick, Move, Place, Move.
     UnsupportedPlan,
-    /// More skills in one class than [`MAX_SKILLS`].
-    TooManySkills,
     /// More stances × grasps than [`MAX_GOALS`].
     TooManyAffordances,
 }
@@ -283,10 +283,6 @@ impl core::fmt::Display for SkillPlanError {
             SkillPlanError::UnsupportedPlan => write!(
                 f,
                 "the action plan is not Move, Pick, Move, Place, Move (the only plan SkillPlan-PTT takes)"
-            ),
-            SkillPlanError::TooManySkills => write!(
-                f,
-                "a motion class has more skills than the planner holds ({MAX_SKILLS})"
             ),
             SkillPlanError::TooManyAffordances => write!(
                 f,
@@ -477,8 +473,10 @@ pub struct Side<'a> {
     pub grasps: usize,
     /// World pose of the platform at each stance (the Move goal).
     pub platform: heapless::Vec<Pose, MAX_AFFORDANCES>,
-    /// The class's skills with an RDMP: (skill, RDMP, learned at this location type).
-    pub skills: heapless::Vec<(u16, u16, bool), MAX_SKILLS>,
+    /// The side's motion class (blob index).
+    pub class: usize,
+    /// How many skills of the class have an RDMP: the side's K.
+    pub skills: usize,
     /// Admissible bound of (stance s, grasp g) at s · grasps + g (see [`Side::bound`]).
     pub bounds: heapless::Vec<f64, MAX_GOALS>,
 }
@@ -488,8 +486,10 @@ impl<'a> Side<'a> {
         rt: &Runtime<'a>,
         location_type: usize,
         grasps: usize,
-        skills: heapless::Vec<(u16, u16, bool), MAX_SKILLS>,
+        class: usize,
     ) -> Result<Self, SkillPlanError> {
+        let mut skills = 0;
+        class_rdmps(rt, class, |_, _, _| skills += 1)?;
         Ok(Side {
             location_type,
             // Symbolic feasibility checked the workspace exists.
@@ -500,6 +500,7 @@ impl<'a> Side<'a> {
             goals: heapless::Vec::new(),
             grasps,
             platform: heapless::Vec::new(),
+            class,
             skills,
             bounds: heapless::Vec::new(),
         })
@@ -565,38 +566,118 @@ impl<'a> Side<'a> {
             .filter(|_| g < self.grasps)
     }
 
-    /// Candidates of the side in their documented order: (stance, skill).
+    /// Candidates of the side in their documented order: (stance, skill), until `visit`
+    /// says stop ([`Side::candidates_in`] pages of [`ORDER_PAGE`]).
     pub fn candidates(
+        &self,
+        rt: &Runtime<'_>,
+        grasp: usize,
+        visit: impl FnMut(u8, u16) -> bool,
+    ) -> Result<(), SkillPlanError> {
+        self.candidates_in::<ORDER_PAGE>(rt, grasp, visit)
+    }
+
+    /// [`Side::candidates`] ordered in pages of `P`: per stance, the `P` least keys above
+    /// the last page's, each page from one pass over the class. Every `P` gives the order
+    /// of a full sort; `P` trades passes for memory.
+    pub fn candidates_in<const P: usize>(
         &self,
         rt: &Runtime<'_>,
         grasp: usize,
         mut visit: impl FnMut(u8, u16) -> bool,
     ) -> Result<(), SkillPlanError> {
-        let mut order: heapless::Vec<(bool, f64, u16), MAX_SKILLS> = heapless::Vec::new();
         for s in 0..self.arm_bases.len() {
             let Some(goal) = self.goal(s, grasp) else {
                 continue;
             };
-            order.clear();
-            for &(k, r, here) in &self.skills {
-                let demo = rt.blob.rdmp_goal(r as usize)?;
-                let d = (goal.translation.vector - demo.translation.vector).norm()
-                    + ROTATION_WEIGHT * angle_between(&goal.rotation, &demo.rotation);
-                // Capacity: `skills` has at most MAX_SKILLS entries.
-                let _ = order.push((!here, d, k));
-            }
-            order.sort_unstable_by(|a, b| {
-                a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2))
-            });
-            for &(_, _, k) in &order {
-                if !visit(s as u8, k) {
-                    return Ok(());
+            let mut after: Option<Ranked> = None;
+            loop {
+                let page = self.page::<P>(rt, goal, after)?;
+                for r in &page {
+                    if !visit(s as u8, r.skill) {
+                        return Ok(());
+                    }
+                }
+                match page.last() {
+                    Some(&last) if page.is_full() => after = Some(last),
+                    _ => break,
                 }
             }
         }
         Ok(())
     }
+
+    /// The `P` least keys of the class's skills for `goal` above `after`, sorted.
+    fn page<const P: usize>(
+        &self,
+        rt: &Runtime<'_>,
+        goal: &Pose,
+        after: Option<Ranked>,
+    ) -> Result<heapless::Vec<Ranked, P>, SkillPlanError> {
+        // A max-heap: its top is the key the next smaller one replaces.
+        let mut least: heapless::BinaryHeap<Ranked, heapless::binary_heap::Max, P> =
+            heapless::BinaryHeap::new();
+        let mut result: Result<(), SkillPlanError> = Ok(());
+        class_rdmps(rt, self.class, |skill, rdmp, learned_at| {
+            let demo = match rt.blob.rdmp_goal(rdmp as usize) {
+                Ok(d) => d,
+                Err(e) => return result = Err(e.into()),
+            };
+            let key = Ranked {
+                elsewhere: learned_at != Some(self.location_type as u8),
+                distance: (goal.translation.vector - demo.translation.vector).norm()
+                    + ROTATION_WEIGHT * angle_between(&goal.rotation, &demo.rotation),
+                skill,
+            };
+            if after.is_some_and(|a| key <= a) {
+                return;
+            }
+            if let Err(key) = least.push(key)
+                && least.peek().is_some_and(|top| key < *top)
+            {
+                least.pop();
+                let _ = least.push(key);
+            }
+        })?;
+        result?;
+        let mut page = least.into_vec();
+        page.sort_unstable();
+        Ok(page)
+    }
 }
+
+/// The order of a side's candidates within a stance: skills learned at the side's location
+/// type first, then by the distance of their demonstrated TCP goal to the candidate's goal,
+/// then by blob index (unique, so the order is total).
+#[derive(Clone, Copy, Debug)]
+struct Ranked {
+    elsewhere: bool,
+    distance: f64,
+    skill: u16,
+}
+
+impl Ord for Ranked {
+    fn cmp(&self, o: &Self) -> core::cmp::Ordering {
+        self.elsewhere
+            .cmp(&o.elsewhere)
+            .then(self.distance.total_cmp(&o.distance))
+            .then(self.skill.cmp(&o.skill))
+    }
+}
+
+impl PartialOrd for Ranked {
+    fn partial_cmp(&self, o: &Self) -> Option<core::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+impl PartialEq for Ranked {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o).is_eq()
+    }
+}
+
+impl Eq for Ranked {}
 
 /// The blob's stances T_b^ℓ of location type `t`.
 fn stances(
@@ -616,21 +697,20 @@ fn stances(
     Ok(out)
 }
 
-/// The skills of class `class` that have an RDMP, marking those learned at location type `t`.
-fn class_skills(
+/// Shows `visit` each skill of class `class` that has an RDMP: (skill, RDMP, the location
+/// type it was learned at), in blob order.
+fn class_rdmps(
     rt: &Runtime<'_>,
     class: usize,
-    t: usize,
-) -> Result<heapless::Vec<(u16, u16, bool), MAX_SKILLS>, SkillPlanError> {
-    let mut out = heapless::Vec::new();
-    for k in rt.skills_of(class) {
+    mut visit: impl FnMut(u16, u16, Option<u8>),
+) -> Result<(), SkillPlanError> {
+    for k in 0..rt.blob.payload.skills.len() {
         let s = rt.blob.skill(k)?;
-        if let Some(r) = s.rdmp {
-            out.push((k as u16, r, s.location_type == Some(t as u8)))
-                .map_err(|_| SkillPlanError::TooManySkills)?;
+        if let (true, Some(r)) = (s.class as usize == class, s.rdmp) {
+            visit(k as u16, r, s.location_type);
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The blob class indices of Pick, Place and Move and their code.
@@ -739,8 +819,8 @@ impl<'a> PttSides<'a> {
             grasp: None,
         };
         let n = grasps.len();
-        let mut pick = Side::new(rt, r.from_type, n, class_skills(rt, c.pick.0, r.from_type)?)?;
-        let mut place = Side::new(rt, r.to_type, n, class_skills(rt, c.place.0, r.to_type)?)?;
+        let mut pick = Side::new(rt, r.from_type, n, c.pick.0)?;
+        let mut place = Side::new(rt, r.to_type, n, c.place.0)?;
         let (mv, pk, pl) = (c.moves.1, c.pick.1, c.place.1);
         let mut result = Ok(());
         // Move(ℓ0, ℓ1) to each stance; Pick's goals there, one per grasp (Alg. 4 line 7).
@@ -890,7 +970,7 @@ pub fn plan_skills_within(
     let stats = PlanStats {
         grid_integrations: 2
             * (pick.arm_bases.len() * place.arm_bases.len() * sides.grasps) as u64
-            * (pick.skills.len() * place.skills.len()) as u64,
+            * (pick.skills * place.skills) as u64,
         ..PlanStats::default()
     };
     let threshold = rt.config.risk_threshold;
@@ -950,8 +1030,8 @@ fn search(
             }
         });
         if lower >= bound {
-            stats.bounded += (pick.arm_bases.len() * pick.skills.len()
-                + place.arm_bases.len() * place.skills.len()) as u32;
+            stats.bounded +=
+                (pick.arm_bases.len() * pick.skills + place.arm_bases.len() * place.skills) as u32;
             continue;
         }
         let mut side = |side| {
