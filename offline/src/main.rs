@@ -64,7 +64,8 @@ enum Command {
     /// ball) near its boundary, and which part of the representation the millimetres come from.
     FieldError(field_error::Args),
     /// The paper's evaluation on the example cell: `rdmp-vs-dmp` (Sec. 4.3, Fig. 3–4) and
-    /// `monte-carlo` (Sec. 6.3, Fig. 5), as tables, CSV and charts (SVG + PNG).
+    /// `monte-carlo` (Sec. 6.3, Fig. 5; `--world plant` on the plant), as tables, CSV and
+    /// charts (SVG + PNG).
     Experiment(experiment::Args),
     /// Plan one task and execute it in real time on the host cell (1 kHz, embassy-time, Ruckig
     /// output stage) against firmware-sim over iceoryx2 shared memory.
@@ -73,9 +74,10 @@ enum Command {
     /// loop's jitter and deadline misses against firmware-sim (beside a probe thread's: the
     /// machine's own stalls), Ruckig's per-update cost.
     BenchCell(bench::cell::Args),
-    /// Learning against the archive's size: per N programs of a generated archive (`--vary`:
-    /// each taught its own way), `prf learn`'s wall time, peak memory and blob (table, CSV,
-    /// charts).
+    /// Learning and planning against the archive's size: per N programs of a generated
+    /// archive (`--vary`: each taught its own way) or your own (`--archive`), `prf learn`'s
+    /// wall time, peak memory and blob, and the host time to plan each task of the world on
+    /// it (table, CSV, charts).
     BenchLearn(bench::learn_scale::Args),
     /// Run tasks on the cell-controller firmware (Cortex-M7 under QEMU mps2-an500, blob flashed
     /// into its region) and check each against the host: executor tick, planning and RAM

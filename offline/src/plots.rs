@@ -98,6 +98,15 @@ where
     Ok(())
 }
 
+/// A count's tick label: whole values only (a tick between two counts stays blank).
+fn whole(v: &f64) -> String {
+    if (v - v.round()).abs() < 1e-9 {
+        format!("{:.0}", v)
+    } else {
+        String::new()
+    }
+}
+
 /// The range of `values` with 5 % padding (a unit range when they are all equal or none).
 fn padded(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     let (lo, hi) = values
@@ -387,7 +396,7 @@ pub struct Band {
     pub points: Vec<(f64, f64, f64, f64)>,
 }
 
-/// Mean lines over min–max bands.
+/// Mean lines over min–max bands: counts against counts, so both axes tick whole numbers.
 pub struct BandPlot<'a> {
     pub title: &'a str,
     pub x_label: &'a str,
@@ -412,7 +421,7 @@ impl Chart for BandPlot<'_> {
         root.fill(&WHITE)?;
         let mut chart = ChartBuilder::on(root)
             .caption(self.title, ("sans-serif", 18))
-            .margin(12)
+            .margin(24)
             .x_label_area_size(40)
             .y_label_area_size(60)
             .build_cartesian_2d(xs.clone(), 0.0..top * 1.08)?;
@@ -420,6 +429,8 @@ impl Chart for BandPlot<'_> {
             .configure_mesh()
             .x_desc(self.x_label)
             .y_desc(self.y_label)
+            .x_label_formatter(&whole)
+            .y_label_formatter(&whole)
             .light_line_style(WHITE.mix(0.0))
             .draw()?;
         for (value, label) in self.references {
@@ -427,9 +438,10 @@ impl Chart for BandPlot<'_> {
                 vec![(xs.start, *value), (xs.end, *value)],
                 BLACK.mix(0.5),
             )])?;
+            // Above its line (a text hangs below the point it is placed at).
             chart.draw_series([Text::new(
                 label.clone(),
-                (xs.start + (xs.end - xs.start) * 0.01, *value),
+                (xs.start + (xs.end - xs.start) * 0.01, value + top * 0.045),
                 ("sans-serif", 13),
             )])?;
         }

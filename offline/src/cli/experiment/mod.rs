@@ -1,5 +1,7 @@
-//! `prf experiment`: the paper's evaluation on the example cell, as tables, CSV and charts.
+//! `prf experiment`: the paper's evaluation on the example cell (Fig. 5 also on another
+//! world), as tables, CSV and charts.
 
+use crate::cli::args::WorldArgs;
 use anyhow::Result;
 use std::path::PathBuf;
 
@@ -13,7 +15,8 @@ pub enum Command {
     RdmpVsDmp(RdmpVsDmpArgs),
     /// Sec. 6.3 (Fig. 5): feasible tasks and afforded tasks as the demonstrations are learned
     /// one at a time in random orders (incremental learning, an exact cache across steps),
-    /// with the two cases of Sec. 7.1 and a from-scratch check of sampled steps.
+    /// with the two cases of Sec. 7.1 and a from-scratch check of sampled steps; `--world
+    /// plant` asks it of the plant.
     MonteCarlo(MonteCarloArgs),
 }
 
@@ -56,10 +59,17 @@ pub struct MonteCarloArgs {
     /// Steps per episode (default: every demonstration).
     #[arg(long)]
     pub steps: Option<usize>,
-    /// The dataset (default: the example cell's 64 afforded tasks, generated in memory with
-    /// planner seed 1, as `prf gen` and `prf demo` make them).
+    /// The dataset (default: generated in memory with planner seed 1: on the example cell its
+    /// 64 afforded tasks, as `prf gen` and `prf demo` make them; on another world
+    /// `--programs` of its afforded tasks drawn at random, each taught its own way, as
+    /// `prf gen --random N --vary` makes them).
     #[arg(long)]
     pub dataset: Option<PathBuf>,
+    #[command(flatten)]
+    pub world: WorldArgs,
+    /// Programs generated for a world other than the example when no `--dataset` is given.
+    #[arg(long, default_value_t = 96)]
+    pub programs: usize,
     /// Steps of the first episode re-counted from scratch (batch learn, every side decided
     /// anew) to check the incremental counts and to time both, comma separated.
     #[arg(long, value_delimiter = ',', default_value = "2,8,32")]

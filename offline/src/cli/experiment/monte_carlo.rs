@@ -2,14 +2,14 @@
 //! cases of Sec. 7.1.
 
 use super::MonteCarloArgs;
+use crate::cli::generate::drawn;
 use crate::cli::progress::Bar;
 use anyhow::{Context, Result, bail};
 use prf_files::dataset::Dataset;
 use prf_offline::experiment::monte_carlo::{Counts, Episode, Setup, run as run_episodes};
 use prf_offline::plots::{self, Band, BandPlot};
 use prf_shared::robot::RobotModel;
-use prf_sim::demogen::generate_dataset;
-use prf_sim::world::World;
+use prf_sim::demogen::generate;
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -28,16 +28,25 @@ const KINDS: [(&str, Count); 3] = [
 ];
 
 pub fn run(a: &MonteCarloArgs) -> Result<()> {
-    let world = World::example();
+    let world = a.world.load()?;
+    // The paper's figures are of its example cell; other worlds are compared with nothing.
+    let example = a
+        .world
+        .world
+        .as_ref()
+        .is_none_or(|w| w.as_os_str() == "example");
     let model = RobotModel::kmr_iiwa14();
     let dataset = match &a.dataset {
         Some(dir) => Dataset::read(dir, &model)
             .with_context(|| format!("reading the dataset {}", dir.display()))?,
         None => {
+            // The example: each afforded task once; another world: an archive's draw.
+            let selection = match example {
+                true => world.afforded_tasks(),
+                false => drawn(&world.afforded_tasks(), a.programs, 1),
+            };
             let bar = Bar::new("generating", "demonstrations", a.quiet);
-            let ds = generate_dataset(&world, &world.afforded_tasks(), 1, 100.0, &|p| {
-                bar.report(p)
-            })?;
+            let ds = generate(&world, &selection, 1, 100.0, !example, &|p| bar.report(p))?;
             bar.finish();
             ds
         }
@@ -74,7 +83,7 @@ pub fn run(a: &MonteCarloArgs) -> Result<()> {
         "Monte Carlo (Sec. 6.3): {} episodes × {steps} steps of {n} demonstrations, {tasks} tasks, {afforded} afforded tasks",
         a.episodes
     );
-    print!("{}", until_table(&episodes, afforded, tasks));
+    print!("{}", until_table(&episodes, afforded, tasks, example));
     println!("Sec. 7.1, two demonstrations learned from scratch:");
     for (name, pair) in setup.special_cases() {
         match pair {
@@ -87,10 +96,11 @@ pub fn run(a: &MonteCarloArgs) -> Result<()> {
                     .filter(|(_, f)| **f)
                     .map(|(t, _)| format!("{} {}→{}", t.part.0, t.from.1, t.to.1))
                     .collect();
-                let which = if feasible.len() == tasks {
-                    "all".to_string()
-                } else {
-                    feasible.join(", ")
+                // Named one by one only while the list stays readable (the example's 18).
+                let which = match feasible.len() {
+                    n if n == tasks => "all".to_string(),
+                    n if n > 18 => format!("{n} tasks"),
+                    _ => feasible.join(", "),
                 };
                 println!(
                     "  {name}: {} of {tasks} tasks physically feasible ({which}); {} of {afforded} afforded tasks",
@@ -218,7 +228,8 @@ fn first_step(e: &Episode, total: usize, f: Count) -> Option<usize> {
 }
 
 /// Steps until every (afforded) task is feasible, against the paper's statements.
-fn until_table(episodes: &[Episode], afforded: usize, tasks: usize) -> String {
+/// Steps until each count is complete, beside the paper's figures when `paper` (the example).
+fn until_table(episodes: &[Episode], afforded: usize, tasks: usize, paper: bool) -> String {
     let range = |f: Count, total: usize| {
         let v: Vec<Option<usize>> = episodes.iter().map(|e| first_step(e, total, f)).collect();
         let reached: Vec<usize> = v.iter().flatten().copied().collect();
@@ -259,8 +270,9 @@ fn until_table(episodes: &[Episode], afforded: usize, tasks: usize) -> String {
             range(KINDS[0].1, afforded),
         ),
     ];
-    for (what, paper, here) in rows {
-        let _ = writeln!(s, "  {what:<58} {paper:<28} {here}");
+    for (what, figure, here) in rows {
+        let figure = if paper { figure } else { "—" };
+        let _ = writeln!(s, "  {what:<58} {figure:<28} {here}");
     }
     s
 }

@@ -44,7 +44,7 @@ use prf_sim::world::World;
 use rand::seq::SliceRandom;
 use rand::{SeedableRng, rngs::StdRng};
 use rayon::prelude::*;
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeSet, HashMap, HashSet};
 use std::time::Instant;
 
 /// The three counts of a step.
@@ -205,6 +205,49 @@ fn count(
 /// The learned fields per location type.
 fn fields(k: &prf_learn::Knowledge) -> Vec<Option<LearnedField>> {
     k.location_types.iter().map(|t| t.field.clone()).collect()
+}
+
+/// What a blob makes physically feasible over a world's tasks, every side decided anew, with
+/// the RDMPs that show it.
+#[derive(Clone, Debug)]
+pub struct Witnessed {
+    pub counts: Counts,
+    /// Per task of [`world_tasks`], physically feasible.
+    pub feasible: Vec<bool>,
+    /// The RDMP (blob index) of a witness of every side the count found feasible: with only
+    /// these RDMPs' skills the same sides have the same witnesses (a candidate's stream
+    /// depends on its RDMP, goal and arm base alone), and no side gains one.
+    pub rdmps: BTreeSet<usize>,
+}
+
+/// [`Witnessed`] of `blob`, compiled from `knowledge` (whose fields it reads), over the tasks
+/// of `world`.
+pub fn witnessed(
+    world: &World,
+    knowledge: &prf_learn::Knowledge,
+    blob: &[u8],
+) -> Result<Witnessed> {
+    let rt = Runtime::load(blob).map_err(|e| anyhow!("loading the blob: {e}"))?;
+    let mut cache = Cache::default();
+    cache.observe(&fields(knowledge));
+    let (counts, feasible) = count(
+        &rt,
+        world,
+        &world_tasks(world),
+        &mut cache,
+        &Shared::default(),
+        &mut 0,
+    )?;
+    let rdmps = cache
+        .sides
+        .values()
+        .filter_map(|s| s.witness_rdmp().map(usize::from))
+        .collect();
+    Ok(Witnessed {
+        counts,
+        feasible,
+        rdmps,
+    })
 }
 
 /// A from-scratch count ([`Setup::from_scratch`]).

@@ -47,6 +47,13 @@ pub struct SideState {
     confirmed: HashSet<u16>,
 }
 
+impl SideState {
+    /// The RDMP (blob index) of the side's witness, if it has one.
+    pub(super) fn witness_rdmp(&self) -> Option<u16> {
+        self.witness.as_ref().map(|w| w.rdmp)
+    }
+}
+
 /// What is known about a candidate (an RDMP to a goal from an arm base) whatever the field:
 /// its stream does not depend on it, so all episodes share this.
 #[derive(Default)]
