@@ -4,11 +4,13 @@
 //! ([`ground_truth`]), the learned field against the exact Ω+ ([`field_error`]), the paper's
 //! experiments ([`experiment`]) and the charts they draw ([`plots`]).
 
+pub mod budget;
 pub mod envelope;
 pub mod experiment;
 pub mod export_mcap;
 pub mod field_error;
 pub mod firmware;
 pub mod ground_truth;
+pub mod memory_map;
 pub mod plots;
 pub mod view;

@@ -259,3 +259,81 @@ fn the_command_writes_fig_5_and_csvs_that_hold_its_counts() {
         }
     }
 }
+
+/// `prf learn --max-blob-bytes` ([`prf_offline::budget::fit`]) on the 12 demonstrations:
+/// a blob that fits is the unbudgeted one, byte for byte; tighter budgets give a blob within
+/// them whose lost tasks are
+/// exactly those the runtime's planner no longer finds feasible, and whose risk-0 programs
+/// keep r from the true cell; a budget nothing fits is an error that says how small it got.
+#[test]
+fn a_budgeted_blob_fits_and_makes_feasible_what_its_report_says() {
+    use prf_offline::budget::fit;
+    use prf_sim::world::geometry::Cell;
+    let s = setup();
+    let learn = || {
+        let mut learner = prf_learn::learn::Learner::new(&s.dataset, &s.model, &s.config).unwrap();
+        let k =
+            prf_learn::learn::learn_into(&mut learner, &s.dataset.demonstrations, &|_| {}).unwrap();
+        (learner, k)
+    };
+    let (mut learner, k) = learn();
+    let full = prf_learn::compile(&k).unwrap();
+    let fitted = fit(&mut learner, k, &s.world, full.len(), &|_| {}, &|_| {}).unwrap();
+    assert!(fitted.blob == full && fitted.rungs.is_empty());
+    let reference = s
+        .from_scratch(&(0..s.len()).collect::<Vec<_>>())
+        .unwrap()
+        .counts;
+    let before = planner_feasible(s, &full);
+    let cell = Cell::new(&s.world, &s.model);
+    let mut margins = Vec::new();
+    for budget in [full.len() * 95 / 100, full.len() * 60 / 100] {
+        let (mut learner, k) = learn();
+        let f = fit(&mut learner, k, &s.world, budget, &|_| {}, &|_| {}).unwrap();
+        let rung = f.rungs.last().expect("a rung");
+        assert!(f.blob.len() <= budget, "{} > {budget} bytes", f.blob.len());
+        assert_eq!(f.reference, reference);
+        if rung.margin == s.config.workspace.certify_margin {
+            // The learned fields, the witnesses' skills: what was feasible stays so.
+            assert_eq!(rung.counts, reference, "budget {budget}");
+        }
+        let after = planner_feasible(s, &f.blob);
+        let lost: Vec<String> = s
+            .tasks()
+            .iter()
+            .zip(before.iter().zip(&after))
+            .filter(|(_, (was, is))| **was && !**is)
+            .map(|(t, _)| t.label())
+            .collect();
+        assert_eq!(f.lost, lost, "budget {budget}");
+        let rt = Runtime::load(&f.blob).unwrap();
+        for t in s.tasks() {
+            let p = plan(&rt, &t.task()).unwrap();
+            if p.skills.feasible {
+                let (worst, contact) =
+                    prf_offline::ground_truth::arm_clearance(&rt, &cell, t, &p).unwrap();
+                let r = s.world.clearance.acceptable;
+                assert!(
+                    worst >= r,
+                    "{}: {:.1} mm from {contact}",
+                    t.label(),
+                    worst * 1e3
+                );
+            }
+        }
+        margins.push(rung.margin);
+    }
+    // The tighter budget needed a smaller margin than the learned one.
+    assert!(
+        margins[1] < s.config.workspace.certify_margin,
+        "{margins:?}"
+    );
+    let (mut learner, k) = learn();
+    let error = fit(&mut learner, k, &s.world, 10_000, &|_| {}, &|_| {})
+        .err()
+        .expect("10 kB is too small");
+    assert!(
+        error.to_string().contains("does not fit 10000 bytes"),
+        "{error}"
+    );
+}

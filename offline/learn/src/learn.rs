@@ -93,6 +93,38 @@ pub struct Knowledge {
     pub timings: Vec<(&'static str, f64)>,
 }
 
+impl Knowledge {
+    /// The knowledge with only the RDMPs in `keep` (indices into [`Knowledge::arms`]) and the
+    /// skills that use them or have none (a fixed generator such as BaseMove), RDMP indices
+    /// renumbered in order. Dropping a skill removes a candidate from every plan; it never
+    /// changes another's risk.
+    pub fn keeping_rdmps(&self, keep: &std::collections::BTreeSet<usize>) -> Knowledge {
+        let renumbered: std::collections::HashMap<usize, usize> = keep
+            .iter()
+            .enumerate()
+            .map(|(new, &old)| (old, new))
+            .collect();
+        Knowledge {
+            arms: keep
+                .iter()
+                .filter_map(|&i| self.arms.get(i).cloned())
+                .collect(),
+            skills: self
+                .skills
+                .iter()
+                .filter_map(|s| match s.rdmp {
+                    None => Some(s.clone()),
+                    Some(r) => Some(Skill {
+                        rdmp: Some(*renumbered.get(&r)?),
+                        ..s.clone()
+                    }),
+                })
+                .collect(),
+            ..self.clone()
+        }
+    }
+}
+
 /// One instance of a class in one demonstration, with what it teaches: what Alg. 3 lines
 /// 5–16 compute from the demonstration alone (in parallel, and once for any number of
 /// learners that add it).
@@ -860,6 +892,22 @@ impl Learner {
         self.sweeps.get(t).and_then(Slot::ready)
     }
 
+    /// Certifies the demonstrated spheres with `margin` from now on (capped as
+    /// [`crate::workspace::WorkspaceConfig::margin_for`] says): every field is rebuilt by the
+    /// next [`Learner::knowledge`]. A smaller margin stores fewer certificates (a smaller
+    /// blob) and rates risk 0 over less of the space around the demonstrations.
+    pub fn recertify(&mut self, margin: f64) {
+        let w = &mut self.config.workspace;
+        w.certify_margin = margin;
+        w.certify_margin = w.margin_for(w.epsilon);
+        self.unbuilt.fill(true);
+    }
+
+    /// The certification margin the fields are built with, m.
+    pub fn margin(&self) -> f64 {
+        self.config.workspace.certify_margin
+    }
+
     /// The location types' names, in type order.
     pub fn location_kinds(&self) -> &[String] {
         &self.location_kinds
@@ -1183,6 +1231,12 @@ impl Learner {
     /// type per thread.
     fn rebuild(&mut self, progress: OnProgress<'_>) -> Result<(), crate::kb::KbError> {
         self.grow_sweeps()?;
+        // A type marked without growing ([`Learner::recertify`]) may still be in the file.
+        for t in 0..self.sweeps.len() {
+            if self.unbuilt[t] {
+                self.read_sweep(t)?;
+            }
+        }
         let wc = self.config.workspace;
         let rebuilt: Vec<(usize, Option<LearnedField>)> = self
             .sweeps

@@ -42,6 +42,16 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             a.blob.display()
         );
     }
+    let (bytes, region) = (
+        std::fs::metadata(&a.blob)?.len(),
+        prf_offline::memory_map::blob_region_bytes(),
+    );
+    if bytes > region as u64 {
+        bail!(
+            "{}: the blob is {bytes} bytes and the controller's BLOB region (memory.x) holds {region}: compile it to fit with `prf learn … --max-blob-bytes {region}` (the default)",
+            a.blob.display()
+        );
+    }
     std::fs::create_dir_all(&a.dir)?;
     let spinner = ProgressBar::new_spinner()
         .with_message("building the firmware (scripts/firmware.sh build)");

@@ -1,5 +1,6 @@
 //! `prf learn`: Learn (Alg. 3) on a dataset and compile the blob.
 
+use crate::cli::args::WorldArgs;
 use crate::cli::progress::Bar;
 use anyhow::Context;
 use prf_files::dataset::{Dataset, DatasetDir};
@@ -8,6 +9,8 @@ use prf_learn::learn::{
     CHUNK, KbFile, Learner, fingerprint, learn_dir, learn_lessons_into, skills_per_class,
 };
 use prf_learn::{LearnConfig, compile, report};
+use prf_offline::budget::{Fitted, Rung, fit};
+use prf_offline::memory_map;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -62,6 +65,15 @@ pub struct Args {
         conflicts_with_all = ["dataset", "urdf", "spheres", "clearance_demo", "clearance", "voxel", "far", "margin"]
     )]
     pub into: Option<PathBuf>,
+    /// The most bytes the blob may take (default: the firmware's BLOB region in memory.x,
+    /// 960 KiB; 0: no limit). A larger blob keeps only the skills that the afforded tasks of
+    /// `--world` need and, if that is not enough, certifies with smaller margins (12, 8, 5, 3,
+    /// 2, 1 mm) until it fits; the report says what was dropped and which tasks, if any,
+    /// lost physical feasibility. `--kb` keeps everything learned.
+    #[arg(long, value_name = "BYTES")]
+    pub max_blob_bytes: Option<usize>,
+    #[command(flatten)]
+    pub world: WorldArgs,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -107,15 +119,23 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let (k, mut learner) = learn_dir(&dir, &model, &cfg, CHUNK, &|p| bar.report(p))?;
     let t_learn = t0.elapsed().as_secs_f64();
     bar.finish();
-    let t2 = Instant::now();
-    let bytes = compile(&k)?;
-    let t_compile = t2.elapsed().as_secs_f64();
-    prf_files::atomic::write(&a.output, &bytes)
-        .with_context(|| format!("writing {}", a.output.display()))?;
+    // The knowledge base keeps everything learned, whatever the blob's budget gives up.
     if let Some(kb) = &a.kb {
         prf_files::atomic::write(kb, learner.save()?)
             .with_context(|| format!("writing {}", kb.display()))?;
     }
+    let timings = k
+        .timings
+        .iter()
+        .map(|(n, t)| format!("{n} {t:.2} s"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let t2 = Instant::now();
+    let fitted = within_budget(a, &mut learner, k)?;
+    let (k, bytes) = (fitted.knowledge, fitted.blob);
+    let t_compile = t2.elapsed().as_secs_f64();
+    prf_files::atomic::write(&a.output, &bytes)
+        .with_context(|| format!("writing {}", a.output.display()))?;
     uncertified_note(&k);
     if a.quiet {
         return Ok(());
@@ -143,15 +163,83 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     print!("{}", report(&bytes)?);
     println!(
-        "time: read and learn {t_learn:.2} s ({}), compile {t_compile:.3} s",
-        k.timings
-            .iter()
-            .map(|(n, t)| format!("{n} {t:.2} s"))
-            .collect::<Vec<_>>()
-            .join(", ")
+        "time: read and learn {t_learn:.2} s ({timings}), compile (within the budget) {t_compile:.3} s"
     );
     println!("wrote {}", a.output.display());
     Ok(())
+}
+
+/// The budget `--max-blob-bytes` asks for (0: none).
+fn budget(a: &Args) -> usize {
+    match a
+        .max_blob_bytes
+        .unwrap_or_else(memory_map::blob_region_bytes)
+    {
+        0 => usize::MAX,
+        n => n,
+    }
+}
+
+/// The blob of `k` within the budget ([`prf_offline::budget::fit`]), each rung tried and
+/// what was given up printed.
+fn within_budget(
+    a: &Args,
+    learner: &mut Learner,
+    k: prf_learn::Knowledge,
+) -> anyhow::Result<Fitted> {
+    let limit = budget(a);
+    let world = a.world.load()?;
+    let kib = |b: usize| b as f64 / 1024.0;
+    let quiet = a.quiet;
+    let bar = Bar::new("recertifying", "workspaces", quiet);
+    let rung = |r: &Rung| {
+        if !quiet {
+            bar.suspend(|| {
+                println!(
+                    "  margin {:>4.1} mm: {:.1} KiB with every skill, {:.1} KiB with the witnesses' only; {} of the world's tasks, {} afforded tasks physically feasible",
+                    r.margin * 1e3,
+                    kib(r.all_skills),
+                    kib(r.witnesses),
+                    r.counts.physical_tasks,
+                    r.counts.physical_afforded
+                )
+            });
+        }
+    };
+    let (skills, rdmps) = (k.skills.len(), k.arms.len());
+    let fitted = fit(learner, k, &world, limit, &|p| bar.report(p), &rung)
+        .with_context(|| format!("fitting the blob within --max-blob-bytes {limit}"))?;
+    bar.finish();
+    if !quiet && !fitted.rungs.is_empty() {
+        let f = &fitted;
+        let kept = match f.knowledge.skills.len() {
+            n if n == skills => "every skill".to_string(),
+            n => format!(
+                "{n} of {skills} skills ({} of {rdmps} RDMPs: a witness of every feasible side)",
+                f.knowledge.arms.len()
+            ),
+        };
+        println!(
+            "budget {:.1} KiB: the blob of everything learned is {:.1} KiB; kept {kept}, certification margin {:.1} mm",
+            kib(limit),
+            kib(f.unbudgeted),
+            f.rungs.last().map_or(0.0, |r| r.margin * 1e3),
+        );
+        let now = f.rungs.last().map(|r| r.counts).unwrap_or_default();
+        println!(
+            "  physically feasible: {} of {} tasks, {} of {} afforded tasks as unbudgeted; lost: {}",
+            now.physical_tasks,
+            f.reference.physical_tasks,
+            now.physical_afforded,
+            f.reference.physical_afforded,
+            if f.lost.is_empty() {
+                "none".to_string()
+            } else {
+                f.lost.join(", ")
+            }
+        );
+    }
+    Ok(fitted)
 }
 
 /// `prf learn --add DATASET… --into KB`: the knowledge base, the new demonstrations folded in,
@@ -210,6 +298,13 @@ fn add(a: &Args, kb: &std::path::Path) -> anyhow::Result<()> {
         .with_context(|| format!("writing {}", kb.display()))?;
     let t_write = t2.elapsed().as_secs_f64() - t_compile;
     uncertified_note(&k);
+    if blob.len() > budget(a) {
+        eprintln!(
+            "note: the blob is {} bytes, over --max-blob-bytes {} (the firmware's BLOB region by default); an addition is not budgeted: learn the whole dataset with `prf learn DATASET --world …` to fit it",
+            blob.len(),
+            budget(a)
+        );
+    }
     if !a.quiet {
         println!(
             "added {} demonstration(s) to {} ({before} → {}): {}",

@@ -31,6 +31,11 @@ impl Bar {
         self.0.inc(1);
     }
 
+    /// Runs `f` (which prints) with the bar hidden meanwhile.
+    pub fn suspend<R>(&self, f: impl FnOnce() -> R) -> R {
+        self.0.suspend(f)
+    }
+
     /// Removes the bar from the terminal.
     pub fn finish(&self) {
         self.0.finish_and_clear();
