@@ -1,8 +1,10 @@
-//! `prf bench-learn`: learning against the size of the archive (issue 66). One archive of the
-//! largest N programs is generated (`prf gen --random N`, with `--vary` each taught its own
-//! way); per N, a dataset of its first N programs is learned by a child `prf learn`, whose
-//! wall time and peak memory (the kernel's `ru_maxrss` of the child) are measured. A table, a
-//! CSV and two charts (time and memory against N).
+//! `prf bench-learn`: learning and planning against the size of the archive (issue 66). One
+//! archive of the largest N programs is generated (`prf gen --random N`, with `--vary` each
+//! taught its own way); per N, a dataset of its first N programs is learned by a child
+//! `prf learn` without a budget, whose wall time and peak memory (the kernel's `ru_maxrss` of
+//! the child) are measured; then every task of the world is planned on that blob, each on its
+//! own (a fresh planner: nothing recalled from another task), timed on the host. A table, a
+//! CSV and three charts (learning time, memory and planning time against N).
 
 use crate::cli::args::WorldArgs;
 use crate::cli::generate::drawn;
@@ -10,7 +12,11 @@ use crate::cli::progress::Bar;
 use anyhow::{Context, bail};
 use prf_files::dataset::{MANIFEST, Manifest};
 use prf_offline::plots::{self, ScalingPlot};
+use prf_runtime::Runtime;
+use prf_runtime::plan::plan;
 use prf_sim::demogen::generate;
+use prf_sim::tasks::world_tasks;
+use prf_sim::world::World;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
@@ -29,6 +35,10 @@ pub struct Args {
     /// Seed of the draws and the planners.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// An archive already written (a dataset directory, e.g. by `prf gen --random N --vary`)
+    /// to take the first N programs of, instead of generating one.
+    #[arg(long)]
+    pub archive: Option<PathBuf>,
     /// Output directory: the archive, per N a dataset of its first N programs and the blob
     /// learned from it, `learn_scale.csv` and the charts.
     #[arg(short, long, default_value = "learn-scale")]
@@ -38,49 +48,67 @@ pub struct Args {
     pub quiet: bool,
 }
 
-/// What learning N programs took.
+/// What learning N programs took, and planning on what they taught.
 struct Row {
     n: usize,
     wall_s: f64,
     peak_mib: f64,
     blob_kib: f64,
+    planned: Planned,
+}
+
+/// Every task of the world planned on a blob, each on its own.
+struct Planned {
+    /// Median and largest host time per task, ms.
+    median_ms: f64,
+    max_ms: f64,
+    /// Tasks physically feasible, of how many.
+    feasible: usize,
+    tasks: usize,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let mut sizes = a.n.clone();
+    sizes.retain(|&n| n > 0);
     sizes.sort_unstable();
     sizes.dedup();
     let Some(&most) = sizes.last().filter(|&&n| n > 0) else {
         bail!("--n: give at least one archive size above 0");
     };
     let world = a.world.load()?;
-    let selection = drawn(&world.afforded_tasks(), most, a.seed);
-    let bar = Bar::new("generating", "programs", a.quiet);
-    let archive = generate(&world, &selection, a.seed, 100.0, a.vary, &|p| {
-        bar.report(p)
-    })?;
-    bar.finish();
-    let all = a.output.join("archive");
-    archive
-        .write(&all)
-        .with_context(|| format!("{}: cannot write the archive", all.display()))?;
+    let all = match &a.archive {
+        Some(dir) => dir.clone(),
+        None => write_archive(a, &world, most)?,
+    };
+    // The per-N datasets name the archive's files by absolute path.
+    let all = std::fs::canonicalize(&all)
+        .with_context(|| format!("{}: no archive there", all.display()))?;
+    let held = archive_manifest(&all)?.demonstrations.len();
+    if held < most {
+        bail!(
+            "{}: the archive holds {held} programs, fewer than --n {most}",
+            all.display()
+        );
+    }
     let mut rows = Vec::new();
     for &n in &sizes {
         let dir = a.output.join(format!("n{n}"));
         first_programs(&all, n, &dir)?;
         let blob = a.output.join(format!("n{n}.blob"));
         let (wall_s, peak_kib) = learn_measured(&dir, &blob)?;
-        let blob_kib = std::fs::metadata(&blob)?.len() as f64 / 1024.0;
+        let bytes = std::fs::read(&blob).with_context(|| format!("reading {}", blob.display()))?;
         let row = Row {
             n,
             wall_s,
             peak_mib: peak_kib as f64 / 1024.0,
-            blob_kib,
+            blob_kib: bytes.len() as f64 / 1024.0,
+            planned: plan_every_task(&world, &bytes)
+                .with_context(|| format!("planning on {}", blob.display()))?,
         };
         if !a.quiet {
             eprintln!(
-                "learned {n} programs: {:.1} s, peak {:.0} MiB",
-                row.wall_s, row.peak_mib
+                "learned {n} programs: {:.1} s, peak {:.0} MiB; planning {:.1} ms per task (median)",
+                row.wall_s, row.peak_mib, row.planned.median_ms
             );
         }
         rows.push(row);
@@ -91,16 +119,57 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A dataset in `dir` of the first `n` programs of the archive in `all`: its manifest, the
-/// files named in the archive (`../archive/…`), not copied.
-fn first_programs(all: &Path, n: usize, dir: &Path) -> anyhow::Result<()> {
+/// Every task of `world` planned on `blob`, each with a fresh planner (nothing recalled).
+fn plan_every_task(world: &World, blob: &[u8]) -> anyhow::Result<Planned> {
+    let rt = Runtime::load(blob).map_err(|e| anyhow::anyhow!("loading the blob: {e}"))?;
+    let tasks = world_tasks(world);
+    let mut ms = Vec::with_capacity(tasks.len());
+    let mut feasible = 0;
+    for t in &tasks {
+        let t0 = Instant::now();
+        let p = plan(&rt, &t.task());
+        ms.push(t0.elapsed().as_secs_f64() * 1e3);
+        feasible += p.is_ok_and(|p| p.skills.feasible) as usize;
+    }
+    ms.sort_by(f64::total_cmp);
+    Ok(Planned {
+        median_ms: ms.get(ms.len() / 2).copied().unwrap_or(0.0),
+        max_ms: ms.last().copied().unwrap_or(0.0),
+        feasible,
+        tasks: tasks.len(),
+    })
+}
+
+/// Generates the archive of `most` programs drawn over the world's afforded tasks into
+/// `OUTPUT/archive`.
+fn write_archive(a: &Args, world: &World, most: usize) -> anyhow::Result<PathBuf> {
+    let selection = drawn(&world.afforded_tasks(), most, a.seed);
+    let bar = Bar::new("generating", "programs", a.quiet);
+    let archive = generate(world, &selection, a.seed, 100.0, a.vary, &|p| bar.report(p))?;
+    bar.finish();
+    let all = a.output.join("archive");
+    archive
+        .write(&all)
+        .with_context(|| format!("{}: cannot write the archive", all.display()))?;
+    Ok(all)
+}
+
+/// The manifest of the archive in `all`.
+fn archive_manifest(all: &Path) -> anyhow::Result<Manifest> {
     let path = all.join(MANIFEST);
-    let text = std::fs::read_to_string(&path)?;
-    let mut manifest: Manifest = prf_files::dataset::parse_manifest(&path, &text)?;
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    Ok(prf_files::dataset::parse_manifest(&path, &text)?)
+}
+
+/// A dataset in `dir` of the first `n` programs of the archive in `all` (an absolute path):
+/// its manifest, naming the archive's files, not copies.
+fn first_programs(all: &Path, n: usize, dir: &Path) -> anyhow::Result<()> {
+    let mut manifest = archive_manifest(all)?;
     manifest.demonstrations.truncate(n);
-    let up = |f: &str| format!("../archive/{f}");
+    let at = |f: &str| all.join(f).to_string_lossy().into_owned();
     for e in &mut manifest.demonstrations {
-        (e.task, e.trajectory) = (up(&e.task), up(&e.trajectory));
+        (e.task, e.trajectory) = (at(&e.task), at(&e.trajectory));
     }
     std::fs::create_dir_all(dir)?;
     prf_files::atomic::write(&dir.join(MANIFEST), serde_json::to_vec_pretty(&manifest)?)
@@ -119,7 +188,7 @@ fn learn_measured(dir: &Path, blob: &Path) -> anyhow::Result<(f64, u64)> {
         .arg(dir)
         .arg("-o")
         .arg(blob)
-        .arg("--quiet")
+        .args(["--max-blob-bytes", "0", "--quiet"])
         .stdout(Stdio::null())
         .stderr(std::fs::File::create(&log)?)
         .spawn()
@@ -158,30 +227,35 @@ fn wait_with_peak(pid: u32) -> anyhow::Result<(i32, u64)> {
 
 /// The rows as a Markdown table.
 fn table(rows: &[Row]) -> String {
-    let mut out =
-        String::from("| programs | learn wall | peak memory | blob |\n|---|---|---|---|\n");
+    let mut out = String::from(
+        "| programs | learn wall | peak memory | blob | planning per task, median / max | tasks feasible |\n|---|---|---|---|---|---|\n",
+    );
     for r in rows {
+        let p = &r.planned;
         out += &format!(
-            "| {} | {:.1} s | {:.0} MiB | {:.1} KiB |\n",
-            r.n, r.wall_s, r.peak_mib, r.blob_kib
+            "| {} | {:.1} s | {:.0} MiB | {:.1} KiB | {:.1} / {:.1} ms | {} of {} |\n",
+            r.n, r.wall_s, r.peak_mib, r.blob_kib, p.median_ms, p.max_ms, p.feasible, p.tasks
         );
     }
     out
 }
 
 fn write_csv(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
-    let mut text = String::from("programs,learn_wall_s,peak_memory_mib,blob_kib\n");
+    let mut text = String::from(
+        "programs,learn_wall_s,peak_memory_mib,blob_kib,plan_median_ms,plan_max_ms,tasks_feasible,tasks\n",
+    );
     for r in rows {
+        let p = &r.planned;
         text += &format!(
-            "{},{:.3},{:.1},{:.1}\n",
-            r.n, r.wall_s, r.peak_mib, r.blob_kib
+            "{},{:.3},{:.1},{:.1},{:.3},{:.3},{},{}\n",
+            r.n, r.wall_s, r.peak_mib, r.blob_kib, p.median_ms, p.max_ms, p.feasible, p.tasks
         );
     }
     prf_files::atomic::write(path, text.as_bytes())
         .with_context(|| format!("writing {}", path.display()))
 }
 
-/// `learn_time` and `learn_memory` (SVG and PNG) in `dir`.
+/// `learn_time`, `learn_memory` and `plan_time` (SVG and PNG) in `dir`.
 fn charts(dir: &Path, rows: &[Row], vary: bool) -> anyhow::Result<()> {
     let x_label = if vary {
         "programs in the archive, each taught its own way"
@@ -209,6 +283,17 @@ fn charts(dir: &Path, rows: &[Row], vary: bool) -> anyhow::Result<()> {
             points: &memory,
         },
         &dir.join("learn_memory"),
+    )?;
+    let planning: Vec<(usize, f64)> = rows.iter().map(|r| (r.n, r.planned.median_ms)).collect();
+    plots::save(
+        &ScalingPlot {
+            title: "prf plan: host time per task against the archive's size",
+            x_label,
+            y_label: "median planning time per task, ms",
+            name: "every task of the world, each planned alone",
+            points: &planning,
+        },
+        &dir.join("plan_time"),
     )?;
     Ok(())
 }
