@@ -85,8 +85,8 @@ cargo run --locked -q -p prf-offline --bin prf -- export-mcap --blob "$smoke/cel
   -o "$smoke/knowledge.mcap" | tail -n 1
 cargo run --locked -q -p prf-offline --bin prf -- field-error "$smoke" --points 200 | tail -n 4
 
-step "CLI smoke run: prf bench-learn (the plant, archives of 2 and 4 programs each taught its own way)"
-cargo run --locked -q -p prf-offline --bin prf -- bench-learn --world plant --vary --n 2,4 \
+step "CLI smoke run: prf bench-learn (the plant, archives of 1 and 2 programs each taught its own way, every task planned on each)"
+cargo run --locked -q -p prf-offline --bin prf -- bench-learn --world plant --vary --n 1,2 \
   -o "$smoke/learn-scale" --quiet | tail -n 2
 
 step "fuzzing, short: every target 5 s from the committed seeds (scripts/fuzz.sh all 5; installs cargo-fuzz)"

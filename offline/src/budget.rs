@@ -10,11 +10,14 @@
 //!   keeps its witness (a candidate's stream depends only on its RDMP, goal and arm base),
 //!   and no side gains one, so the same afforded tasks stay physically feasible (checked
 //!   again on the blob written);
-//! - **the certification margin** ([`Learner::recertify`]): when the skills alone do not
-//!   fit, the fields are rebuilt on a ladder of smaller margins ([`MARGINS`]) until the blob
-//!   fits, with every skill if they fit at that margin, else with the witnesses'; fewer certificates are stored, so part poses farther from the demonstrated ones
-//!   rate a risk sooner. The afforded tasks each rung still makes feasible are counted anew
-//!   (with every skill, then its witnesses kept), and the report names the tasks lost.
+//! - **certification margin, workspace by workspace** ([`Learner::recertify_type`]): when
+//!   the skills alone do not fit, the largest workspace that can go lower is rebuilt one rung
+//!   down a ladder of margins ([`MARGINS`]), and again, until the blob fits (with every skill
+//!   if they fit, else with the witnesses'). So each workspace's share of the budget follows
+//!   its size, and a small workspace keeps a large margin. A smaller margin stores fewer
+//!   certificates: part poses farther from the demonstrated ones rate a risk sooner. The
+//!   afforded tasks each rung still makes feasible are counted anew (with every skill, then
+//!   its witnesses kept), and the report names the tasks lost.
 
 use crate::experiment::monte_carlo::{Counts, Witnessed, witnessed};
 use anyhow::{Result, anyhow, bail};
@@ -27,17 +30,29 @@ use prf_sim::world::World;
 /// The certification margins tried below the learned one, m, largest first.
 pub const MARGINS: [f64; 6] = [0.012, 0.008, 0.005, 0.003, 0.002, 0.001];
 
-/// One rung of the ladder: its margin and what its blob came to.
+/// One rung of the ladder: the workspaces' margins and what the blob came to.
 #[derive(Clone, Debug)]
 pub struct Rung {
-    /// Certification margin of the fields, m.
-    pub margin: f64,
+    /// Per location type (blob order): its name and the certification margin of its field, m.
+    pub margins: Vec<(String, f64)>,
     /// Bytes of the blob with every skill.
     pub all_skills: usize,
     /// Bytes of the blob with the witnesses' skills only.
     pub witnesses: usize,
     /// The afforded tasks this rung makes physically feasible.
     pub counts: Counts,
+}
+
+impl Rung {
+    /// The margins as "CNC 12, Printer 17 mm".
+    pub fn margins_mm(&self) -> String {
+        let each: Vec<String> = self
+            .margins
+            .iter()
+            .map(|(name, m)| format!("{name} {:.0}", m * 1e3))
+            .collect();
+        format!("{} mm", each.join(", "))
+    }
 }
 
 /// A blob within the budget and what it gave up.
@@ -58,8 +73,9 @@ pub struct Fitted {
 
 /// The blob of `knowledge` (learned by `learner`) within `budget` bytes, for the tasks of
 /// `world`: unchanged when it fits, else skills and certificates given up as the module
-/// says. `rung` is told of each rung tried, `progress` of each field rebuilt. An error when even the smallest margin with the
-/// witnesses' skills alone does not fit, naming the smallest size reached.
+/// says. `rung` is told of each rung tried, `progress` of each field rebuilt. An error when
+/// even the smallest margins with the witnesses' skills alone do not fit, naming the
+/// smallest size reached.
 pub fn fit(
     learner: &mut Learner,
     knowledge: Knowledge,
@@ -82,16 +98,32 @@ pub fn fit(
     }
     same_types(world, &knowledge)?;
     let reference = witnessed(world, &knowledge, &blob)?;
-    let learned = learner.margin();
-    let mut smaller = MARGINS.into_iter().filter(|&m| m < learned);
+    // Per location type its ladder: the learned margin, then the smaller ones of MARGINS.
+    let ladders: Vec<Vec<f64>> = (0..knowledge.location_types.len())
+        .map(|t| {
+            let m = learner.margin(t);
+            std::iter::once(m)
+                .chain(MARGINS.into_iter().filter(|&x| x < m))
+                .collect()
+        })
+        .collect();
+    progress(Progress::Total(
+        ladders.iter().map(|l| l.len() as u64 - 1).sum(),
+    ));
+    let mut level = vec![0; ladders.len()];
     let mut rungs = Vec::new();
-    let (mut margin, mut all) = (learned, (knowledge, blob, reference.clone()));
+    let mut all = (knowledge, blob, reference.clone());
     loop {
         let (k, blob, w) = &all;
         let kept = k.keeping_rdmps(&w.rdmps);
         let small = compile(&kept)?;
         let r = Rung {
-            margin,
+            margins: k
+                .location_types
+                .iter()
+                .zip(ladders.iter().zip(&level))
+                .map(|(t, (ladder, &l))| (t.name.clone(), ladder[l]))
+                .collect(),
             all_skills: blob.len(),
             witnesses: small.len(),
             counts: w.counts,
@@ -105,16 +137,16 @@ pub fn fit(
         if small.len() <= budget {
             return settle(world, &reference, kept, small, w, unbudgeted, rungs);
         }
-        let Some(next) = smaller.next() else {
+        // The largest workspace that can still go a rung lower.
+        let field_bytes = |t: usize| k.location_types[t].field.as_ref().map_or(0, |f| f.bytes());
+        let Some(t) = (0..ladders.len())
+            .filter(|&t| level[t] + 1 < ladders[t].len() && field_bytes(t) > 0)
+            .max_by_key(|&t| (field_bytes(t), std::cmp::Reverse(t)))
+        else {
             break;
         };
-        if margin == learned {
-            // Every type's field is rebuilt per rung: at most this many builds.
-            let ladder = MARGINS.iter().filter(|&&m| m < learned).count();
-            progress(Progress::Total((ladder * k.location_types.len()) as u64));
-        }
-        margin = next;
-        learner.recertify(next);
+        level[t] += 1;
+        learner.recertify_type(t, ladders[t][level[t]]);
         let k = learner.knowledge(progress)?;
         let blob = compile(&k)?;
         let w = witnessed(world, &k, &blob)?;
@@ -126,8 +158,8 @@ pub fn fit(
         .min()
         .unwrap_or(unbudgeted);
     Err(anyhow!(
-        "the knowledge does not fit {budget} bytes: with the certification margin at {:.0} mm and only the skills the world's afforded tasks need, the blob is {smallest} bytes",
-        margin * 1e3,
+        "the knowledge does not fit {budget} bytes: with every workspace certified at {:.0} mm or less and only the skills the world's afforded tasks need, the blob is {smallest} bytes",
+        MARGINS[MARGINS.len() - 1] * 1e3,
     ))
 }
 

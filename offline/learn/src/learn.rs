@@ -631,6 +631,9 @@ pub struct Learner {
     /// Per location type, whether its sweep grew since its field was built
     /// ([`Learner::absorb`] grows sweeps without building).
     unbuilt: Vec<bool>,
+    /// Per location type, the certification margin its field is built with where it is not
+    /// the configuration's ([`Learner::recertify_type`], a flash budget's); not saved.
+    margins: Vec<Option<f64>>,
     /// Per location type, the paths its last field build grew its sweep by and which of
     /// their spheres were new (what an addition records of them, [`Learner::addition`]).
     grown: Vec<Grown>,
@@ -685,6 +688,7 @@ impl Learner {
             ],
             pending: vec![Vec::new(); location_kinds.len()],
             unbuilt: vec![false; location_kinds.len()],
+            margins: vec![None; location_kinds.len()],
             grown: vec![Grown::default(); location_kinds.len()],
             location_kinds,
             part_kinds,
@@ -900,12 +904,34 @@ impl Learner {
         let w = &mut self.config.workspace;
         w.certify_margin = margin;
         w.certify_margin = w.margin_for(w.epsilon);
+        self.margins.fill(None);
         self.unbuilt.fill(true);
     }
 
-    /// The certification margin the fields are built with, m.
-    pub fn margin(&self) -> f64 {
-        self.config.workspace.certify_margin
+    /// [`Learner::recertify`] for location type `t` alone (its field is rebuilt by the next
+    /// [`Learner::knowledge`]); the knowledge base keeps the configured margin.
+    pub fn recertify_type(&mut self, t: usize, margin: f64) {
+        let w = WorkspaceConfig {
+            certify_margin: margin,
+            ..self.config.workspace
+        };
+        if let (Some(m), Some(u)) = (self.margins.get_mut(t), self.unbuilt.get_mut(t)) {
+            (*m, *u) = (Some(w.margin_for(w.epsilon)), true);
+        }
+    }
+
+    /// The certification margin location type `t`'s field is built with, m.
+    pub fn margin(&self, t: usize) -> f64 {
+        self.workspace_config(t).certify_margin
+    }
+
+    /// The workspace settings location type `t`'s field is built with.
+    fn workspace_config(&self, t: usize) -> WorkspaceConfig {
+        let mut w = self.config.workspace;
+        if let Some(Some(m)) = self.margins.get(t) {
+            w.certify_margin = *m;
+        }
+        w
     }
 
     /// The location types' names, in type order.
@@ -1170,6 +1196,7 @@ impl Learner {
             sweeps,
             grown: vec![Grown::default(); types],
             unbuilt: vec![false; types],
+            margins: vec![None; types],
             pending: st
                 .pending
                 .into_iter()
@@ -1237,7 +1264,9 @@ impl Learner {
                 self.read_sweep(t)?;
             }
         }
-        let wc = self.config.workspace;
+        let wcs: Vec<WorkspaceConfig> = (0..self.sweeps.len())
+            .map(|t| self.workspace_config(t))
+            .collect();
         let rebuilt: Vec<(usize, Option<LearnedField>)> = self
             .sweeps
             .par_iter_mut()
@@ -1246,7 +1275,7 @@ impl Learner {
             .filter(|(_, (_, unbuilt))| **unbuilt)
             .filter_map(|(t, (slot, _))| Some((t, slot.ready_mut()?)))
             .map(|(t, sweep)| {
-                let f = workspace::build_field(sweep, &wc);
+                let f = workspace::build_field(sweep, &wcs[t]);
                 progress(Progress::Done(1));
                 (t, f)
             })
@@ -1268,7 +1297,9 @@ impl Learner {
             }
         }
         let robot = &self.robot;
-        let wc = self.config.workspace;
+        let wcs: Vec<WorkspaceConfig> = (0..self.sweeps.len())
+            .map(|t| self.workspace_config(t))
+            .collect();
         let grown: Vec<(usize, Grown)> = self
             .sweeps
             .par_iter_mut()
@@ -1282,7 +1313,7 @@ impl Learner {
             .map(|(t, sweep, pending, known)| {
                 // The decisions of the last build recovered before its sweep grows.
                 let paths: Vec<&SweptPath> = pending.iter().map(|p| p.as_ref()).collect();
-                let fresh = sweep.grow(robot, &paths, known.field.as_ref(), &wc);
+                let fresh = sweep.grow(robot, &paths, known.field.as_ref(), &wcs[t]);
                 let grown = Grown::new(pending, fresh);
                 pending.clear();
                 (t, grown)

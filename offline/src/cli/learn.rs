@@ -191,13 +191,13 @@ fn within_budget(
     let world = a.world.load()?;
     let kib = |b: usize| b as f64 / 1024.0;
     let quiet = a.quiet;
-    let bar = Bar::new("recertifying", "workspaces", quiet);
+    let bar = Bar::new("recertifying", "workspace rungs (at most)", quiet);
     let rung = |r: &Rung| {
         if !quiet {
             bar.suspend(|| {
                 println!(
-                    "  margin {:>4.1} mm: {:.1} KiB with every skill, {:.1} KiB with the witnesses' only; {} of the world's tasks, {} afforded tasks physically feasible",
-                    r.margin * 1e3,
+                    "  margins {}: {:.1} KiB with every skill, {:.1} KiB with the witnesses' only; {} tasks, {} afforded tasks physically feasible",
+                    r.margins_mm(),
                     kib(r.all_skills),
                     kib(r.witnesses),
                     r.counts.physical_tasks,
@@ -220,17 +220,17 @@ fn within_budget(
             ),
         };
         println!(
-            "budget {:.1} KiB: the blob of everything learned is {:.1} KiB; kept {kept}, certification margin {:.1} mm",
+            "budget {:.1} KiB: the blob of everything learned is {:.1} KiB; kept {kept}; certification margins {}",
             kib(limit),
             kib(f.unbudgeted),
-            f.rungs.last().map_or(0.0, |r| r.margin * 1e3),
+            f.rungs.last().map_or_else(String::new, |r| r.margins_mm()),
         );
         let now = f.rungs.last().map(|r| r.counts).unwrap_or_default();
         println!(
-            "  physically feasible: {} of {} tasks, {} of {} afforded tasks as unbudgeted; lost: {}",
+            "  physically feasible: {} tasks and {} afforded tasks (unbudgeted: {} and {}); tasks lost: {}",
             now.physical_tasks,
-            f.reference.physical_tasks,
             now.physical_afforded,
+            f.reference.physical_tasks,
             f.reference.physical_afforded,
             if f.lost.is_empty() {
                 "none".to_string()
