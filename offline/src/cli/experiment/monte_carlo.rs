@@ -94,7 +94,7 @@ pub fn run(a: &MonteCarloArgs) -> Result<()> {
                     .iter()
                     .zip(&s.feasible)
                     .filter(|(_, f)| **f)
-                    .map(|(t, _)| format!("{} {}→{}", t.part.0, t.from.1, t.to.1))
+                    .map(|(t, _)| t.label())
                     .collect();
                 // Named one by one only while the list stays readable (the example's 18).
                 let which = match feasible.len() {
