@@ -158,23 +158,23 @@ pub fn fit(
         .min()
         .unwrap_or(unbudgeted);
     Err(anyhow!(
-        "the knowledge does not fit {budget} bytes: with every workspace certified at {:.0} mm or less and only the skills the world's afforded tasks need, the blob is {smallest} bytes",
+        "the knowledge does not fit {budget} bytes: with every workspace certified at {:.0} mm and only the skills the world's afforded tasks need, the blob is {smallest} bytes",
         MARGINS[MARGINS.len() - 1] * 1e3,
     ))
 }
 
-/// The fitted blob `small` of `kept`, checked to make what its rung counted (`w`) feasible,
+/// The fitted `blob` of `knowledge`, checked to make what its rung counted (`w`) feasible,
 /// with the tasks lost against `reference`.
 fn settle(
     world: &World,
     reference: &Witnessed,
-    kept: Knowledge,
-    small: Vec<u8>,
+    knowledge: Knowledge,
+    blob: Vec<u8>,
     w: &Witnessed,
     unbudgeted: usize,
     rungs: Vec<Rung>,
 ) -> Result<Fitted> {
-    let check = witnessed(world, &kept, &small)?;
+    let check = witnessed(world, &knowledge, &blob)?;
     if check.counts != w.counts {
         bail!(
             "the budgeted blob makes {:?} feasible where its rung counted {:?}",
@@ -189,8 +189,8 @@ fn settle(
         .map(|(t, _)| t.label())
         .collect();
     Ok(Fitted {
-        blob: small,
-        knowledge: kept,
+        blob,
+        knowledge,
         unbudgeted,
         reference: reference.counts,
         rungs,
