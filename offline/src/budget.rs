@@ -11,10 +11,11 @@
 //!   and no side gains one, so the same afforded tasks stay physically feasible (checked
 //!   again on the blob written);
 //! - **certification margin, workspace by workspace** ([`Learner::recertify_type`]): when
-//!   the skills alone do not fit, the largest workspace that can go lower is rebuilt one rung
-//!   down a ladder of margins ([`MARGINS`]), and again, until the blob fits (with every skill
-//!   if they fit, else with the witnesses'). So each workspace's share of the budget follows
-//!   its size, and a small workspace keeps a large margin. A smaller margin stores fewer
+//!   the skills alone do not fit, a workspace is rebuilt one rung down a ladder of margins
+//!   ([`MARGINS`]), and another, until the blob fits (with every skill if they fit, else with
+//!   the witnesses'): of those with the largest margin, the largest workspace first. So the
+//!   margins come down together, the blob stops shrinking as soon as it fits, and the
+//!   small workspaces, lowered last, keep a rung more where the budget allows it. A smaller margin stores fewer
 //!   certificates: part poses farther from the demonstrated ones rate a risk sooner. The
 //!   afforded tasks each rung still makes feasible are counted anew (with every skill, then
 //!   its witnesses kept), and the report names the tasks lost.
@@ -137,11 +138,18 @@ pub fn fit(
         if small.len() <= budget {
             return settle(world, &reference, kept, small, w, unbudgeted, rungs);
         }
-        // The largest workspace that can still go a rung lower.
+        // Of the workspaces that can still go a rung lower, one with the largest margin, and
+        // of those the largest: the margins come down together, the small workspaces last.
         let field_bytes = |t: usize| k.location_types[t].field.as_ref().map_or(0, |f| f.bytes());
         let Some(t) = (0..ladders.len())
             .filter(|&t| level[t] + 1 < ladders[t].len() && field_bytes(t) > 0)
-            .max_by_key(|&t| (field_bytes(t), std::cmp::Reverse(t)))
+            .max_by(|&a, &b| {
+                let margin = |t: usize| ladders[t][level[t]];
+                margin(a)
+                    .total_cmp(&margin(b))
+                    .then(field_bytes(a).cmp(&field_bytes(b)))
+                    .then(b.cmp(&a))
+            })
         else {
             break;
         };
